@@ -1,0 +1,34 @@
+// Pooling of per-element values into one score, and linear feature models.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "qm3d/common/features.h"
+
+namespace qm3d {
+
+/// Arithmetic mean, summed sequentially in element order (deterministic). Empty -> 0.
+double mean_pool(const std::vector<double>& values);
+
+/// Minkowski pooling (sum |x|^p / n)^(1/p), summed in element order (MSDM2 uses p = 3).
+double minkowski_pool(const std::vector<double>& values, double p);
+
+/// Component-wise mean of per-element feature vectors, summed in element order.
+FeatureVector mean_features(const std::vector<FeatureVector>& per_element);
+
+/// A metric's score as a weighted sum of its (pooled) features.
+struct LinearModel {
+  std::string metric;       ///< "cmdm", "pcqm", ...
+  FeatureVector weights{};  ///< weight of f1..f8
+  std::string provenance;   ///< where the weights come from
+
+  double apply(const FeatureVector& features) const;
+};
+
+/// CMDM: 0.091 f2 + 0.22 f5 + 0.032 f6 + 0.656 f7 (CMDM paper eq. 1.13; MEPP2 cmdm.h).
+const LinearModel& cmdm_model();
+/// PCQM: 0.0057 F3 + 0.9771 F4 + 0.0172 F6 (PCQM paper; MEPP-team/PCQM main.cpp).
+const LinearModel& pcqm_model();
+
+}  // namespace qm3d

@@ -1,0 +1,47 @@
+// Gaussian-weighted statistics of paired samples (an element's neighbourhood and its image on the
+// other object), with the conventions of each reference implementation.
+#pragma once
+
+#include <vector>
+
+namespace qm3d {
+
+/// Gaussian weight G(d) = exp(-d^2 / (2 sigma^2)) / (sigma sqrt(2 * 3.141592)).
+/// The truncated pi is the references' (MEPP2 cmdm.h, PCQM main.cpp); the constant cancels
+/// because every statistic is normalised by the sum of weights.
+double gaussian_weight(double distance, double sigma);
+
+/// Which weights the cross term sigma_12 uses, and how it is normalised.
+enum class CovarianceWeighting {
+  kFirst,  ///< sum w1 (x1 - mu1)(x2 - mu2) / sum w1   (CMDM, PCQM)
+  kMixed,  ///< sum w2 (x1 - mu1)(x2 - mu2) / sum w1   (MSDM2, SPEC-CMDM 2)
+};
+
+struct CovarianceConvention {
+  CovarianceWeighting weighting = CovarianceWeighting::kFirst;
+  bool clamp_at_zero = false;  ///< sigma_12 <- max(sigma_12, 0)  (CMDM)
+};
+
+/// Means, standard deviations and covariance of two paired sample sets.
+struct PairedMoments {
+  double mean1 = 0;
+  double mean2 = 0;
+  double sd1 = 0;
+  double sd2 = 0;
+  double cov12 = 0;
+};
+
+/// Gaussian-weighted moments with biased normalisation: mean_k = sum w_k x_k / sum w_k,
+/// sd_k = sqrt(sum w_k (x_k - mean_k)^2 / sum w_k), and the cross term per `convention`.
+/// x1, x2, w1, w2 have the same, non-zero length.
+PairedMoments weighted_moments(const std::vector<double>& x1, const std::vector<double>& x2,
+                               const std::vector<double>& w1, const std::vector<double>& w2,
+                               const CovarianceConvention& convention);
+
+/// Unweighted moments (divide by n), covariance not clamped: PCQM's lightness structure.
+PairedMoments unweighted_moments(const std::vector<double>& x1, const std::vector<double>& x2);
+
+/// sum w x / sum w.
+double weighted_mean(const std::vector<double>& x, const std::vector<double>& w);
+
+}  // namespace qm3d

@@ -1,0 +1,82 @@
+#include "qm3d/common/features.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace qm3d {
+
+using namespace constants;
+
+double curvature_comparison(double mean1, double mean2) {
+  return std::fabs(mean1 - mean2) / (std::max(mean1, mean2) + kCurvatureStabilizer);
+}
+
+double curvature_contrast(double sd1, double sd2) {
+  return std::fabs(sd1 - sd2) / (std::max(sd1, sd2) + kCurvatureStabilizer);
+}
+
+double curvature_structure(double sd1, double sd2, double cov12) {
+  return std::fabs(sd1 * sd2 - cov12) / (sd1 * sd2 + kCurvatureStabilizer);
+}
+
+double lightness_similarity(double mean1, double mean2) {
+  const double d = mean1 - mean2;
+  return 1.0 / (kLightnessC1 * d * d + 1.0);
+}
+
+double lightness_contrast_similarity(double sd1, double sd2) {
+  return (2.0 * sd1 * sd2 + kLightnessContrastC2) / (sd1 * sd1 + sd2 * sd2 + kLightnessContrastC2);
+}
+
+double lightness_structure_similarity(double sd1, double sd2, double cov12) {
+  return (cov12 + kLightnessStructureC3) / (sd1 * sd2 + kLightnessStructureC3);
+}
+
+double chroma_similarity(double mean1, double mean2) {
+  const double d = mean1 - mean2;
+  return 1.0 / (kChromaC4 * d * d + 1.0);
+}
+
+double hue_similarity(double mean_hue_difference) {
+  return 1.0 / (kHueC5 * mean_hue_difference * mean_hue_difference + 1.0);
+}
+
+void NeighbourhoodSamples::clear() {
+  for (auto* v : {&w1, &w2, &curv1, &curv2, &light1, &light2, &chroma1, &chroma2, &hue_diff}) {
+    v->clear();
+  }
+}
+
+FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  const PairedMoments m = weighted_moments(s.curv1, s.curv2, s.w1, s.w2, conv.curvature_covariance);
+  FeatureVector f{};
+  f[0] = curvature_comparison(m.mean1, m.mean2);
+  f[1] = curvature_contrast(m.sd1, m.sd2);
+  f[2] = curvature_structure(m.sd1, m.sd2, m.cov12);
+  if (conv.cap_curvature_structure) f[2] = std::min(f[2], 1.0);
+  return f;
+}
+
+FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  const PairedMoments light =
+      weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance);
+  const PairedMoments structure = conv.unweighted_lightness_structure
+                                      ? unweighted_moments(s.light1, s.light2)
+                                      : light;
+  FeatureVector f{};
+  f[3] = 1.0 - lightness_similarity(light.mean1, light.mean2);
+  f[4] = 1.0 - lightness_contrast_similarity(light.sd1, light.sd2);
+  f[5] = 1.0 - lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
+  f[6] = 1.0 - chroma_similarity(weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2));
+  f[7] = 1.0 - hue_similarity(weighted_mean(s.hue_diff, s.w1));
+  return f;
+}
+
+FeatureVector local_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  FeatureVector f = curvature_features(s, conv);
+  const FeatureVector c = color_features(s, conv);
+  for (std::size_t k = 3; k < kNumFeatures; ++k) f[k] = c[k];
+  return f;
+}
+
+}  // namespace qm3d

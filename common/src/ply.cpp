@@ -1,0 +1,510 @@
+#include "qm3d/common/ply.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+
+namespace qm3d::ply {
+namespace {
+
+constexpr std::size_t kMaxHeaderBytes = 1 << 20;
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) {
+  throw FormatError(name + ": PLY: " + what);
+}
+
+std::size_t scalar_size(ScalarType t) {
+  switch (t) {
+    case ScalarType::kInt8:
+    case ScalarType::kUint8:
+      return 1;
+    case ScalarType::kInt16:
+    case ScalarType::kUint16:
+      return 2;
+    case ScalarType::kInt32:
+    case ScalarType::kUint32:
+    case ScalarType::kFloat32:
+      return 4;
+    case ScalarType::kFloat64:
+      return 8;
+  }
+  return 8;
+}
+
+bool is_integer_type(ScalarType t) { return t != ScalarType::kFloat32 && t != ScalarType::kFloat64; }
+
+std::optional<ScalarType> parse_type(const std::string& s) {
+  if (s == "char" || s == "int8") return ScalarType::kInt8;
+  if (s == "uchar" || s == "uint8") return ScalarType::kUint8;
+  if (s == "short" || s == "int16") return ScalarType::kInt16;
+  if (s == "ushort" || s == "uint16") return ScalarType::kUint16;
+  if (s == "int" || s == "int32") return ScalarType::kInt32;
+  if (s == "uint" || s == "uint32") return ScalarType::kUint32;
+  if (s == "float" || s == "float32") return ScalarType::kFloat32;
+  if (s == "double" || s == "float64") return ScalarType::kFloat64;
+  return std::nullopt;
+}
+
+const char* type_name(ScalarType t) {
+  switch (t) {
+    case ScalarType::kInt8: return "char";
+    case ScalarType::kUint8: return "uchar";
+    case ScalarType::kInt16: return "short";
+    case ScalarType::kUint16: return "ushort";
+    case ScalarType::kInt32: return "int";
+    case ScalarType::kUint32: return "uint";
+    case ScalarType::kFloat32: return "float";
+    case ScalarType::kFloat64: return "double";
+  }
+  return "?";
+}
+
+std::vector<std::string> split_words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> words;
+  std::string w;
+  while (in >> w) words.push_back(w);
+  return words;
+}
+
+std::uint64_t parse_count(const std::string& s, const std::string& name) {
+  if (s.empty() || s.size() > 19 || !std::all_of(s.begin(), s.end(), ::isdigit)) {
+    fail(name, "bad element count '" + s + "'");
+  }
+  return std::stoull(s);
+}
+
+// Minimal bytes one record of `e` occupies, to bound what a header may claim.
+std::uint64_t min_record_bytes(const Element& e, Format format) {
+  std::uint64_t bytes = 0;
+  for (const auto& p : e.properties) {
+    if (format == Format::kAscii) {
+      bytes += 2;  // at least one character and one separator
+    } else {
+      bytes += p.is_list ? scalar_size(p.count_type) : scalar_size(p.type);
+    }
+  }
+  return std::max<std::uint64_t>(bytes, 1);
+}
+
+// Sequential reader of the data section, ASCII (line per record) or binary.
+class Cursor {
+ public:
+  Cursor(const std::string& bytes, std::size_t offset, Format format, const std::string& name)
+      : data_(bytes.data()), size_(bytes.size()), pos_(offset), format_(format), name_(name) {}
+
+  void begin_record(const std::string& where) {
+    where_ = &where;
+    if (format_ != Format::kAscii) return;
+    // Skip blank lines, then delimit the record's line.
+    while (pos_ < size_ && (data_[pos_] == '\n' || data_[pos_] == '\r' || data_[pos_] == ' ' ||
+                            data_[pos_] == '\t')) {
+      ++pos_;
+    }
+    if (pos_ >= size_) fail(name_, "file ends before " + where);
+    const void* nl = std::memchr(data_ + pos_, '\n', size_ - pos_);
+    line_end_ = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_) : size_;
+  }
+
+  void end_record() {
+    if (format_ != Format::kAscii) return;
+    skip_spaces();
+    if (pos_ < line_end_) fail(name_, *where_ + " has more values than the header declares");
+    pos_ = line_end_;
+  }
+
+  double value(ScalarType t) {
+    return format_ == Format::kAscii ? ascii_value(t) : binary_value(t);
+  }
+
+ private:
+  void skip_spaces() {
+    while (pos_ < line_end_ && (data_[pos_] == ' ' || data_[pos_] == '\t' || data_[pos_] == '\r')) {
+      ++pos_;
+    }
+  }
+
+  double ascii_value(ScalarType t) {
+    skip_spaces();
+    if (pos_ >= line_end_) fail(name_, *where_ + " has fewer values than the header declares");
+    std::size_t end = pos_;
+    while (end < line_end_ && data_[end] != ' ' && data_[end] != '\t' && data_[end] != '\r') ++end;
+    token_.assign(data_ + pos_, end - pos_);
+    char* stop = nullptr;
+    const double v = std::strtod(token_.c_str(), &stop);
+    if (stop != token_.c_str() + token_.size() || token_.empty()) {
+      fail(name_, *where_ + ": '" + token_ + "' is not a number");
+    }
+    if (is_integer_type(t) && (v != std::floor(v) || !std::isfinite(v))) {
+      fail(name_, *where_ + ": '" + token_ + "' is not an integer (" + type_name(t) + ")");
+    }
+    pos_ = end;
+    return v;
+  }
+
+  template <typename T>
+  T load() {
+    T v;
+    unsigned char raw[sizeof(T)];
+    std::memcpy(raw, data_ + pos_, sizeof(T));
+    const bool big = format_ == Format::kBinaryBigEndian;
+    if (big) std::reverse(raw, raw + sizeof(T));  // hosts are little endian (x86-64, arm64)
+    std::memcpy(&v, raw, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+
+  double binary_value(ScalarType t) {
+    if (size_ - pos_ < scalar_size(t)) fail(name_, "file is truncated in " + *where_);
+    switch (t) {
+      case ScalarType::kInt8: return load<std::int8_t>();
+      case ScalarType::kUint8: return load<std::uint8_t>();
+      case ScalarType::kInt16: return load<std::int16_t>();
+      case ScalarType::kUint16: return load<std::uint16_t>();
+      case ScalarType::kInt32: return load<std::int32_t>();
+      case ScalarType::kUint32: return load<std::uint32_t>();
+      case ScalarType::kFloat32: return load<float>();
+      case ScalarType::kFloat64: return load<double>();
+    }
+    return 0;
+  }
+
+  const char* data_;
+  std::size_t size_;
+  std::size_t pos_;
+  std::size_t line_end_ = 0;
+  Format format_;
+  const std::string& name_;
+  const std::string* where_ = nullptr;
+  std::string token_;
+};
+
+struct VertexLayout {
+  int x = -1, y = -1, z = -1;
+  int red = -1, green = -1, blue = -1;
+};
+
+int find_property(const Element& e, const std::string& name) {
+  for (std::size_t i = 0; i < e.properties.size(); ++i) {
+    if (e.properties[i].name == name && !e.properties[i].is_list) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+VertexLayout vertex_layout(const Element& e, const std::string& name) {
+  VertexLayout l;
+  l.x = find_property(e, "x");
+  l.y = find_property(e, "y");
+  l.z = find_property(e, "z");
+  if (l.x < 0 || l.y < 0 || l.z < 0) fail(name, "vertex element has no x, y, z properties");
+  const char* names[3][3] = {{"red", "green", "blue"}, {"r", "g", "b"},
+                             {"diffuse_red", "diffuse_green", "diffuse_blue"}};
+  for (const auto& n : names) {
+    const int r = find_property(e, n[0]), g = find_property(e, n[1]), b = find_property(e, n[2]);
+    if (r >= 0 && g >= 0 && b >= 0) {
+      l.red = r;
+      l.green = g;
+      l.blue = b;
+      break;
+    }
+  }
+  return l;
+}
+
+ColorEncoding color_encoding(const Element& e, const VertexLayout& l, const std::string& name) {
+  if (l.red < 0) return ColorEncoding::kNone;
+  const ScalarType t = e.properties[l.red].type;
+  if (e.properties[l.green].type != t || e.properties[l.blue].type != t) {
+    fail(name, "colour channels have different types");
+  }
+  switch (t) {
+    case ScalarType::kUint8: return ColorEncoding::kUint8;
+    case ScalarType::kUint16: return ColorEncoding::kUint16;
+    case ScalarType::kFloat32:
+    case ScalarType::kFloat64: return ColorEncoding::kFloat;
+    default:
+      fail(name, std::string("unsupported colour type '") + type_name(t) +
+                     "' (expected uchar, ushort or float)");
+  }
+}
+
+void read_vertices(Cursor& cur, const Element& e, const std::string& name, Content& out) {
+  const VertexLayout l = vertex_layout(e, name);
+  out.color_encoding = color_encoding(e, l, name);
+  out.positions.resize(e.count);
+  if (out.color_encoding != ColorEncoding::kNone) out.colors.resize(e.count);
+  std::vector<double> values(e.properties.size());
+  std::string where;
+  for (std::uint64_t i = 0; i < e.count; ++i) {
+    where = "vertex " + std::to_string(i);
+    cur.begin_record(where);
+    for (std::size_t k = 0; k < e.properties.size(); ++k) {
+      const Property& p = e.properties[k];
+      if (p.is_list) {
+        const double n = cur.value(p.count_type);
+        if (n < 0) fail(name, where + ": negative list length");
+        for (double j = 0; j < n; ++j) cur.value(p.type);
+        values[k] = 0;
+      } else {
+        values[k] = cur.value(p.type);
+      }
+    }
+    cur.end_record();
+    out.positions[i] = {values[l.x], values[l.y], values[l.z]};
+    if (!std::isfinite(values[l.x]) || !std::isfinite(values[l.y]) || !std::isfinite(values[l.z])) {
+      fail(name, where + " has a non-finite coordinate");
+    }
+    if (out.color_encoding != ColorEncoding::kNone) {
+      out.colors[i] = {values[l.red], values[l.green], values[l.blue]};
+    }
+  }
+}
+
+void normalise_colors(Content& c, const std::string& name) {
+  double scale = 1.0;
+  bool round_255 = false;
+  if (c.color_encoding == ColorEncoding::kUint8) scale = 255.0;
+  if (c.color_encoding == ColorEncoding::kUint16) scale = 65535.0;
+  if (c.color_encoding == ColorEncoding::kFloat) {
+    double max_value = 0;
+    for (std::size_t i = 0; i < c.colors.size(); ++i) {
+      for (double v : {c.colors[i].r, c.colors[i].g, c.colors[i].b}) {
+        if (!(v >= 0.0) || v > 255.5) {
+          fail(name, "vertex " + std::to_string(i) + " has colour value " + std::to_string(v) +
+                         " outside [0, 1] and [0, 255]");
+        }
+        max_value = std::max(max_value, v);
+      }
+    }
+    // Float colours are 0..1; a file with any value above 1 is read as 0..255 (MEPP2's rule).
+    round_255 = max_value > 1.0;
+  }
+  for (Rgb& rgb : c.colors) {
+    for (double* v : {&rgb.r, &rgb.g, &rgb.b}) {
+      *v = round_255 ? std::floor(*v + 0.5) / 255.0 : *v / scale;
+    }
+  }
+}
+
+int face_list_property(const Element& e) {
+  for (std::size_t i = 0; i < e.properties.size(); ++i) {
+    const auto& p = e.properties[i];
+    if (p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index")) {
+      return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+void read_faces(Cursor& cur, const Element& e, const std::string& name, Content& out) {
+  const int list = face_list_property(e);
+  out.face_offsets.assign(1, 0);
+  out.face_offsets.reserve(e.count + 1);
+  const double num_vertices = static_cast<double>(out.positions.size());
+  std::string where;
+  for (std::uint64_t f = 0; f < e.count; ++f) {
+    where = "face " + std::to_string(f);
+    cur.begin_record(where);
+    for (std::size_t k = 0; k < e.properties.size(); ++k) {
+      const Property& p = e.properties[k];
+      if (!p.is_list) {
+        cur.value(p.type);
+        continue;
+      }
+      const double n = cur.value(p.count_type);
+      if (n < 0) fail(name, where + ": negative list length");
+      for (double j = 0; j < n; ++j) {
+        const double idx = cur.value(p.type);
+        if (static_cast<int>(k) != list) continue;
+        if (idx < 0 || idx >= num_vertices) {
+          fail(name, where + " refers to vertex " + std::to_string(static_cast<long long>(idx)) +
+                         ", but there are " + std::to_string(out.positions.size()) + " vertices");
+        }
+        out.face_indices.push_back(static_cast<std::uint32_t>(idx));
+      }
+      if (static_cast<int>(k) == list && n < 3) {
+        fail(name, where + " has " + std::to_string(static_cast<int>(n)) + " vertices (need 3)");
+      }
+    }
+    cur.end_record();
+    if (list >= 0) out.face_offsets.push_back(static_cast<std::uint32_t>(out.face_indices.size()));
+  }
+}
+
+void skip_element(Cursor& cur, const Element& e, const std::string& name) {
+  std::string where;
+  for (std::uint64_t i = 0; i < e.count; ++i) {
+    where = e.name + " " + std::to_string(i);
+    cur.begin_record(where);
+    for (const auto& p : e.properties) {
+      if (p.is_list) {
+        const double n = cur.value(p.count_type);
+        if (n < 0) fail(name, where + ": negative list length");
+        for (double j = 0; j < n; ++j) cur.value(p.type);
+      } else {
+        cur.value(p.type);
+      }
+    }
+    cur.end_record();
+  }
+}
+
+}  // namespace
+
+Header parse_header(const std::string& bytes, const std::string& name) {
+  if (bytes.size() < 4 || bytes.compare(0, 3, "ply") != 0 || (bytes[3] != '\n' && bytes[3] != '\r')) {
+    fail(name, "not a PLY file (missing 'ply' magic)");
+  }
+  const std::size_t end = bytes.find("end_header", 0);
+  if (end == std::string::npos || end > kMaxHeaderBytes) fail(name, "no end_header line");
+  std::size_t data = bytes.find('\n', end);
+  data = data == std::string::npos ? bytes.size() : data + 1;
+  Header h;
+  bool have_format = false;
+  std::istringstream lines(bytes.substr(0, end));
+  std::string line;
+  std::getline(lines, line);  // magic
+  while (std::getline(lines, line)) {
+    const auto w = split_words(line);
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "format") {
+      if (w.size() < 2) fail(name, "bad format line");
+      if (w[1] == "ascii") h.format = Format::kAscii;
+      else if (w[1] == "binary_little_endian") h.format = Format::kBinaryLittleEndian;
+      else if (w[1] == "binary_big_endian") h.format = Format::kBinaryBigEndian;
+      else fail(name, "unknown format '" + w[1] + "'");
+      have_format = true;
+    } else if (w[0] == "element") {
+      if (w.size() != 3) fail(name, "bad element line '" + line + "'");
+      h.elements.push_back(Element{w[1], parse_count(w[2], name), {}});
+    } else if (w[0] == "property") {
+      if (h.elements.empty()) fail(name, "property before any element");
+      Property p;
+      if (w.size() == 5 && w[1] == "list") {
+        const auto ct = parse_type(w[2]), it = parse_type(w[3]);
+        if (!ct || !it || !is_integer_type(*ct)) fail(name, "bad list property '" + line + "'");
+        p = Property{w[4], *it, true, *ct};
+      } else if (w.size() == 3) {
+        const auto t = parse_type(w[1]);
+        if (!t) fail(name, "unknown property type '" + w[1] + "'");
+        p = Property{w[2], *t, false, ScalarType::kUint8};
+      } else {
+        fail(name, "bad property line '" + line + "'");
+      }
+      h.elements.back().properties.push_back(p);
+    } else {
+      fail(name, "unexpected header line '" + line + "'");
+    }
+  }
+  if (!have_format) fail(name, "no format line");
+  h.data_offset = data;
+  // A header may not claim more records than the data section can hold (checked before any
+  // allocation, so a corrupt count fails fast).
+  std::uint64_t available = bytes.size() - std::min(bytes.size(), data);
+  for (const auto& e : h.elements) {
+    const std::uint64_t per = min_record_bytes(e, h.format);
+    if (e.count > 0 && e.properties.empty()) fail(name, "element " + e.name + " has no properties");
+    if (e.count > (available + 1) / per) {
+      fail(name, "header declares " + std::to_string(e.count) + " " + e.name +
+                     " elements but the file is too short to hold them");
+    }
+    available -= std::min(available, e.count * per);
+  }
+  return h;
+}
+
+Content parse(const std::string& bytes, const std::string& name) {
+  const Header h = parse_header(bytes, name);
+  Content out;
+  Cursor cur(bytes, h.data_offset, h.format, name);
+  bool have_vertices = false;
+  for (const auto& e : h.elements) {
+    if (e.name == "vertex" && !have_vertices) {
+      read_vertices(cur, e, name, out);
+      have_vertices = true;
+    } else if (e.name == "face" && have_vertices && face_list_property(e) >= 0) {
+      read_faces(cur, e, name, out);
+    } else {
+      skip_element(cur, e, name);
+    }
+  }
+  if (!have_vertices) fail(name, "no vertex element");
+  normalise_colors(out, name);
+  return out;
+}
+
+Content read(const std::filesystem::path& path) {
+  return parse(read_file_bytes(path), path.string());
+}
+
+namespace {
+
+template <typename T>
+void put(std::ostream& out, T v) {
+  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+}  // namespace
+
+void write(const std::filesystem::path& path, const WriteData& d) {
+  if (!d.colors.empty() && d.colors.size() != d.positions.size()) {
+    throw std::invalid_argument("ply::write: colour count differs from vertex count");
+  }
+  if (!d.scalar_name.empty() && d.scalars.size() != d.positions.size()) {
+    throw std::invalid_argument("ply::write: scalar count differs from vertex count");
+  }
+  if (d.format == Format::kBinaryBigEndian) {
+    throw std::invalid_argument("ply::write: big-endian output is not supported");
+  }
+  const bool ascii = d.format == Format::kAscii;
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\n"
+        << "comment written by qm3d\n"
+        << "element vertex " << d.positions.size() << "\n";
+    const char* ptype = d.double_positions ? "double" : "float";
+    out << "property " << ptype << " x\nproperty " << ptype << " y\nproperty " << ptype << " z\n";
+    if (!d.colors.empty()) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    if (!d.scalar_name.empty()) out << "property float " << d.scalar_name << "\n";
+    if (!d.triangles.empty()) {
+      out << "element face " << d.triangles.size() << "\nproperty list uchar int vertex_indices\n";
+    }
+    out << "end_header\n";
+    out.precision(17);
+    for (std::size_t i = 0; i < d.positions.size(); ++i) {
+      const Vec3& p = d.positions[i];
+      if (ascii) {
+        out << p[0] << ' ' << p[1] << ' ' << p[2];
+        if (!d.colors.empty()) {
+          out << ' ' << int(d.colors[i][0]) << ' ' << int(d.colors[i][1]) << ' '
+              << int(d.colors[i][2]);
+        }
+        if (!d.scalar_name.empty()) out << ' ' << d.scalars[i];
+        out << '\n';
+        continue;
+      }
+      for (double c : p) {
+        if (d.double_positions) put<double>(out, c);
+        else put<float>(out, static_cast<float>(c));
+      }
+      if (!d.colors.empty()) out.write(reinterpret_cast<const char*>(d.colors[i].data()), 3);
+      if (!d.scalar_name.empty()) put<float>(out, d.scalars[i]);
+    }
+    for (const Triangle& t : d.triangles) {
+      if (ascii) {
+        out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+        continue;
+      }
+      put<std::uint8_t>(out, 3);
+      for (auto idx : t) put<std::int32_t>(out, static_cast<std::int32_t>(idx));
+    }
+  });
+}
+
+}  // namespace qm3d::ply

@@ -1,0 +1,15 @@
+// Where the tests find their data: the shared reference data beside the project (read at run
+// time, never copied) and the LAB2000HL tables.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace qm3d::test {
+
+inline std::filesystem::path shared_data() { return QM3D_SHARED_DATA_DIR; }
+inline std::filesystem::path reference_dir() { return shared_data() / "reference"; }
+inline std::filesystem::path tables_dir() { return shared_data() / "lab2000hl"; }
+inline std::filesystem::path source_dir() { return QM3D_SOURCE_DIR; }
+
+}  // namespace qm3d::test
