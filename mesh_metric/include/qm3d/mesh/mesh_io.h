@@ -1,0 +1,38 @@
+// Reading coloured triangle meshes: OBJ (`v x y z r g b`), OFF / COFF (RGB or RGBA, comments),
+// PLY (ASCII and binary, both endians; colours uchar, ushort or float).
+//
+// Colour ranges follow MEPP2's reader where the format is ambiguous (SPEC-CMDM 1.2): OBJ and OFF
+// colours are read as 0..1 unless any value of the file exceeds 1, in which case every value is
+// c -> floor(c + 0.5) / 255. PLY colours use the range their type says. Like MEPP2, colours are
+// kept at float precision, so that scores match the reference to ~1e-10.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/types.h"
+
+namespace qm3d::mesh {
+
+/// A mesh read from a file, with what the reader changed on the way.
+struct MeshFile {
+  ColoredMesh mesh;
+  /// One line per repair: polygons fan-triangulated, unreferenced vertices dropped.
+  std::vector<std::string> warnings;
+  /// For each vertex of `mesh`, its index in the file (differs only when vertices were dropped).
+  std::vector<std::uint32_t> file_vertex;
+};
+
+/// Reads a mesh, dispatching on the extension (.obj, .off, .ply; case-insensitive).
+///
+/// Throws InputError (missing / unreadable path) or FormatError naming the file: unknown
+/// extension, malformed content, face index out of range, no vertex colours or colours on only
+/// some vertices, colour values outside [0, 255], no faces.
+MeshFile read_mesh(const std::filesystem::path& path);
+
+/// Reads only the vertices (positions and colours) of any mesh format; faces may be absent.
+/// Used to read a mesh as a point cloud.
+ColoredCloud read_mesh_vertices(const std::filesystem::path& path);
+
+}  // namespace qm3d::mesh

@@ -1,0 +1,30 @@
+// Curvature-tensor estimation on a geodesic-like ball (Cohen-Steiner & Morvan's normal cycle, as
+// MEPP2 implements it), post-processed into one scalar per vertex. Internal.
+#pragma once
+
+#include <vector>
+
+#include "halfedge_mesh.h"
+
+namespace qm3d::mesh::detail {
+
+enum class CurvatureVariant {
+  /// MEPP2 curvature_cmdm.hpp (SPEC-CMDM 1.5): only non-border edges that cross the sphere
+  /// contribute; the walk test is ">= 0".
+  kCmdm,
+  /// MEPP2's generic curvature.hpp as MSDM2 uses it (SPEC-CMDM 2): every non-border edge inside
+  /// the ball contributes (clipped where it crosses); the walk test is "> 0".
+  kGeneric,
+};
+
+/// maxdim * (|k1| + |k2|) / 2 per vertex, where k1, k2 are the two principal curvatures of
+/// largest magnitude of the tensor accumulated within `radius` (SPEC-CMDM 1.5 step 7).
+/// Parallel over vertices; the result does not depend on the thread count.
+std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
+                                        CurvatureVariant variant);
+
+/// MEPP2's sphere_clip_vector (ClippingAndIntersection.hpp): clips `v`, starting at `p`, to the
+/// sphere (o, r). Returns true when the segment crosses the sphere ("isect").
+bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v);
+
+}  // namespace qm3d::mesh::detail

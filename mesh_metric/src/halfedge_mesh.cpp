@@ -1,0 +1,154 @@
+#include "halfedge_mesh.h"
+
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "qm3d/common/error.h"
+
+namespace qm3d::mesh::detail {
+namespace {
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using Point = Kernel::Point_3;
+using SurfaceMesh = CGAL::Surface_mesh<Point>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+// Tries to build the mesh face by face; false when some face cannot be added (non-manifold).
+bool add_faces_directly(const std::vector<Vec3>& positions, const std::vector<Triangle>& tris,
+                        SurfaceMesh& sm) {
+  for (const Vec3& p : positions) sm.add_vertex(Point(p[0], p[1], p[2]));
+  for (const Triangle& t : tris) {
+    const auto f = sm.add_face(SurfaceMesh::Vertex_index(t[0]), SurfaceMesh::Vertex_index(t[1]),
+                               SurfaceMesh::Vertex_index(t[2]));
+    if (f == SurfaceMesh::null_face()) return false;
+  }
+  return true;
+}
+
+// Repairs a non-manifold soup by duplicating vertices; records where each vertex came from.
+void build_from_soup(HalfedgeMesh& out, std::vector<Triangle>& tris, SurfaceMesh& sm) {
+  std::vector<Point> points;
+  points.reserve(out.positions.size());
+  for (const Vec3& p : out.positions) points.emplace_back(p[0], p[1], p[2]);
+  std::vector<std::vector<std::size_t>> polygons;
+  polygons.reserve(tris.size());
+  for (const Triangle& t : tris) polygons.push_back({t[0], t[1], t[2]});
+  const std::size_t original = points.size();
+  PMP::orient_polygon_soup(points, polygons);
+  // New points are copies of original ones: map them back by their coordinates.
+  std::map<std::array<double, 3>, std::uint32_t> first_index;
+  for (std::uint32_t i = 0; i < original; ++i) {
+    first_index.emplace(out.positions[i], i);
+  }
+  for (std::size_t i = original; i < points.size(); ++i) {
+    const std::array<double, 3> key{points[i].x(), points[i].y(), points[i].z()};
+    const std::uint32_t src = first_index.at(key);
+    out.positions.push_back(key);
+    out.colors.push_back(out.colors[src]);
+    out.input_vertex.push_back(out.input_vertex[src]);
+  }
+  sm.clear();
+  PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
+  tris.clear();
+  for (auto f : sm.faces()) {
+    Triangle t{};
+    int k = 0;
+    for (auto v : vertices_around_face(sm.halfedge(f), sm)) t[k++] = static_cast<std::uint32_t>(v);
+    tris.push_back(t);
+  }
+}
+
+VertexRings extract_rings(const SurfaceMesh& sm) {
+  VertexRings r;
+  r.offsets.reserve(sm.number_of_vertices() + 1);
+  r.offsets.push_back(0);
+  const std::size_t nh = sm.number_of_halfedges();
+  r.source.reserve(nh);
+  r.face.reserve(nh);
+  r.opposite_face.reserve(nh);
+  auto face_id = [&](SurfaceMesh::Halfedge_index h) {
+    const auto f = sm.face(h);
+    return f == SurfaceMesh::null_face() ? kNoFace : static_cast<std::int32_t>(f);
+  };
+  for (auto v : sm.vertices()) {
+    const auto h0 = sm.halfedge(v);
+    if (h0 != SurfaceMesh::null_halfedge()) {
+      for (auto h : halfedges_around_target(h0, sm)) {
+        r.source.push_back(static_cast<std::uint32_t>(sm.source(h)));
+        r.face.push_back(face_id(h));
+        r.opposite_face.push_back(face_id(sm.opposite(h)));
+      }
+    }
+    r.offsets.push_back(static_cast<std::uint32_t>(r.source.size()));
+  }
+  return r;
+}
+
+}  // namespace
+
+Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const Vec3 w{c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+  const Vec3 n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (len == 0.0) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
+  return {n[0] / len, n[1] / len, n[2] / len};
+}
+
+HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name) {
+  HalfedgeMesh out;
+  out.positions = mesh.positions;
+  out.colors = mesh.colors;
+  out.input_vertex.resize(mesh.positions.size());
+  for (std::uint32_t i = 0; i < out.input_vertex.size(); ++i) out.input_vertex[i] = i;
+
+  std::vector<Triangle> tris;
+  tris.reserve(mesh.triangles.size());
+  std::size_t repeated = 0;
+  for (const Triangle& t : mesh.triangles) {
+    for (auto v : t) {
+      if (v >= mesh.positions.size()) {
+        throw FormatError(name + ": face refers to vertex " + std::to_string(v) + ", but there are " +
+                          std::to_string(mesh.positions.size()) + " vertices");
+      }
+    }
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      ++repeated;
+      continue;
+    }
+    tris.push_back(t);
+  }
+  if (repeated > 0) {
+    out.warnings.push_back(name + ": dropped " + std::to_string(repeated) +
+                           " faces that repeat a vertex");
+  }
+  if (tris.empty()) throw FormatError(name + ": no valid faces");
+
+  SurfaceMesh sm;
+  if (!add_faces_directly(out.positions, tris, sm)) {
+    const std::size_t before = out.positions.size();
+    build_from_soup(out, tris, sm);
+    out.warnings.push_back(name + ": non-manifold mesh repaired by duplicating " +
+                           std::to_string(out.positions.size() - before) +
+                           " vertices (and re-orienting faces where needed)");
+  }
+  out.rings = extract_rings(sm);
+  out.triangles = std::move(tris);
+  out.face_normals.resize(out.triangles.size());
+  for (std::size_t f = 0; f < out.triangles.size(); ++f) {
+    const Triangle& t = out.triangles[f];
+    out.face_normals[f] = face_normal(out.positions[t[0]], out.positions[t[1]], out.positions[t[2]]);
+  }
+  return out;
+}
+
+}  // namespace qm3d::mesh::detail

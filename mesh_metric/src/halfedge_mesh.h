@@ -1,0 +1,48 @@
+// The connectivity the CMDM / MSDM2 walks need, extracted once from a CGAL Surface_mesh into flat
+// arrays (the Surface_mesh itself is released, which keeps memory low on large meshes). Internal.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/types.h"
+
+namespace qm3d::mesh::detail {
+
+inline constexpr std::int32_t kNoFace = -1;
+
+/// Incoming half-edges (w -> v) of every vertex v, in CGAL's circulation order around v.
+struct VertexRings {
+  std::vector<std::uint32_t> offsets;   ///< #V + 1
+  std::vector<std::uint32_t> source;    ///< w of each incoming half-edge
+  std::vector<std::int32_t> face;       ///< face on the half-edge's side (kNoFace on a border)
+  std::vector<std::int32_t> opposite_face;  ///< face on the other side (kNoFace on a border)
+
+  std::uint32_t begin(std::uint32_t v) const { return offsets[v]; }
+  std::uint32_t end(std::uint32_t v) const { return offsets[v + 1]; }
+};
+
+/// A triangle mesh ready for the metric: positions, triangles, unit face normals (NaN for a
+/// collinear triangle, as MEPP2 has them), vertex rings.
+struct HalfedgeMesh {
+  std::vector<Vec3> positions;
+  std::vector<Rgb> colors;
+  std::vector<Triangle> triangles;
+  std::vector<Vec3> face_normals;
+  VertexRings rings;
+  /// Index in the input mesh of each vertex (non-manifold vertices are duplicated, like MEPP2's
+  /// reader does, so a vertex of the input may appear more than once).
+  std::vector<std::uint32_t> input_vertex;
+  std::vector<std::string> warnings;
+};
+
+/// Builds the connectivity. Faces with a repeated vertex are dropped with a warning;
+/// non-manifold configurations are repaired by duplicating vertices (CGAL's
+/// orient_polygon_soup), with a warning. `name` names the mesh in messages.
+HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name);
+
+/// Unit normal of triangle (a, b, c); NaN components when it is degenerate.
+Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace qm3d::mesh::detail

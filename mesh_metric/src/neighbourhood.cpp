@@ -1,0 +1,121 @@
+#include "neighbourhood.h"
+
+#include <cmath>
+
+#include "qm3d/common/statistics.h"
+#include "vec3_ops.h"
+
+namespace qm3d::mesh::detail {
+namespace {
+
+// MEPP2's replacement for a vanishing clip parameter (cmdm.h: `if(t < 1.e-16) t = 0.01;`).
+constexpr double kTinyClipParameter = 1e-16;
+constexpr double kTinyClipReplacement = 0.01;
+
+// One sample: its position, curvature and colour on each side.
+struct Sample {
+  Vec3 point1, point2;
+  double curv1 = 0, curv2 = 0;
+  Lab color1, color2;
+};
+
+Lab blend(const Lab& a, const Lab& b, double t) {
+  return {(1 - t) * a.L + t * b.L, (1 - t) * a.a + t * b.a, (1 - t) * a.b + t * b.b};
+}
+
+Sample vertex_sample(const MatchedFields& f, std::uint32_t v) {
+  Sample s;
+  s.point1 = f.mesh->positions[v];
+  s.point2 = (*f.matched_point)[v];
+  s.curv1 = (*f.curvature)[v];
+  s.curv2 = (*f.curvature_match)[v];
+  if (f.color) {
+    s.color1 = (*f.color)[v];
+    s.color2 = (*f.color_match)[v];
+  }
+  return s;
+}
+
+// The point where edge (v -> w) leaves the sphere: position v + clipped, attributes blended with
+// t = |clipped| / |edge| (computed as MEPP2 does, from the two lengths).
+Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
+                       const Vec3& clipped, double len_old) {
+  const double t = norm(clipped) / len_old;
+  const auto& q = *f.matched_point;
+  Sample s;
+  s.point1 = add(f.mesh->positions[v], clipped);
+  s.point2 = add(q[v], scale(sub(q[w], q[v]), t));
+  s.curv1 = (1 - t) * (*f.curvature)[v] + t * (*f.curvature)[w];
+  s.curv2 = (1 - t) * (*f.curvature_match)[v] + t * (*f.curvature_match)[w];
+  if (f.color) {
+    s.color1 = blend((*f.color)[v], (*f.color)[w], t);
+    s.color2 = blend((*f.color_match)[v], (*f.color_match)[w], t);
+  }
+  return s;
+}
+
+void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, double sigma,
+                 bool with_color, NeighbourhoodSamples& out) {
+  out.w1.push_back(gaussian_weight(distance(s.point1, center1), sigma));
+  out.w2.push_back(gaussian_weight(distance(s.point2, center2), sigma));
+  out.curv1.push_back(s.curv1);
+  out.curv2.push_back(s.curv2);
+  if (!with_color) return;
+  out.light1.push_back(s.color1.L);
+  out.light2.push_back(s.color2.L);
+  out.chroma1.push_back(chroma(s.color1));
+  out.chroma2.push_back(chroma(s.color2));
+  out.hue_diff.push_back(hue_difference(s.color1, s.color2));
+}
+
+}  // namespace
+
+bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v) {
+  const Vec3 w = sub(p, o);
+  const double a = dot(v, v);
+  const double b = 2.0 * dot(v, w);
+  const double c = dot(w, w) - r * r;
+  const double delta = b * b - 4 * a * c;
+  if (a == 0) return true;
+  if (delta < 0) return true;
+  double t = (-b + std::sqrt(delta)) / (2.0 * a);
+  if (t < 0.0) return true;
+  if (t >= 1.0) return false;
+  if (t < kTinyClipParameter) t = kTinyClipReplacement;
+  v = scale(v, t);
+  return true;
+}
+
+void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkParameters& walk,
+                          WalkScratch& scratch, NeighbourhoodSamples& out) {
+  const HalfedgeMesh& m = *f.mesh;
+  const bool with_color = f.color != nullptr;
+  const Vec3& o = m.positions[v0];
+  const Vec3& q0 = (*f.matched_point)[v0];
+  out.clear();
+  push_sample(vertex_sample(f, v0), o, q0, walk.sigma, with_color, out);
+  scratch.start(m.positions.size());
+  scratch.visit(v0);
+  scratch.stack.push_back(v0);
+  while (!scratch.stack.empty()) {
+    const std::uint32_t v = scratch.stack.back();
+    scratch.stack.pop_back();
+    const Vec3& p = m.positions[v];
+    const Vec3 p_minus_o = sub(p, o);
+    for (std::uint32_t k = m.rings.begin(v); k < m.rings.end(v); ++k) {
+      const std::uint32_t w = m.rings.source[k];
+      Vec3 vec = sub(m.positions[w], p);
+      const double along = dot(vec, p_minus_o);
+      if (v != v0 && !(walk.strict_outward_test ? along > 0.0 : along >= 0.0)) continue;
+      const double len_old = norm(vec);
+      const bool isect = sphere_clip_vector_cmdm(o, walk.radius, p, vec);
+      if (!isect && !scratch.visit(w)) continue;  // inside and already sampled
+      if (!isect) scratch.stack.push_back(w);
+      const Sample s = (len_old != 0 && isect) ? crossing_sample(f, v, w, vec, len_old)
+                                               : vertex_sample(f, w);
+      push_sample(s, o, q0, walk.sigma, with_color, out);
+    }
+  }
+}
+
+}  // namespace qm3d::mesh::detail

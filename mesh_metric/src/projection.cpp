@@ -1,0 +1,106 @@
+#include "projection.h"
+
+#include <CGAL/AABB_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/Simple_cartesian.h>
+#include <boost/iterator/counting_iterator.hpp>
+
+#include <cmath>
+
+#include "vec3_ops.h"
+
+namespace qm3d::mesh::detail {
+namespace {
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using Point = Kernel::Point_3;
+using Triangle3 = Kernel::Triangle_3;
+
+// Property maps that build a face's triangle and reference point from our arrays on demand, so
+// the AABB tree stores only face indices (no copy of the mesh).
+struct FaceTriangleMap {
+  const HalfedgeMesh* mesh = nullptr;
+  using key_type = std::uint32_t;
+  using value_type = Triangle3;
+  using reference = Triangle3;
+  using category = boost::readable_property_map_tag;
+  friend Triangle3 get(const FaceTriangleMap& m, std::uint32_t f) {
+    const auto& t = m.mesh->triangles[f];
+    const auto& p = m.mesh->positions;
+    return Triangle3(Point(p[t[0]][0], p[t[0]][1], p[t[0]][2]),
+                     Point(p[t[1]][0], p[t[1]][1], p[t[1]][2]),
+                     Point(p[t[2]][0], p[t[2]][1], p[t[2]][2]));
+  }
+};
+
+struct FacePointMap {
+  const HalfedgeMesh* mesh = nullptr;
+  using key_type = std::uint32_t;
+  using value_type = Point;
+  using reference = Point;
+  using category = boost::readable_property_map_tag;
+  friend Point get(const FacePointMap& m, std::uint32_t f) {
+    const auto& p = m.mesh->positions[m.mesh->triangles[f][0]];
+    return Point(p[0], p[1], p[2]);
+  }
+};
+
+using Primitive = CGAL::AABB_primitive<std::uint32_t, FaceTriangleMap, FacePointMap,
+                                       CGAL::Tag_true /*external maps*/, CGAL::Tag_false>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+double heron_area(double p, double a, double b, double c) {
+  const double s = p * (p - a) * (p - b) * (p - c);
+  return s > 0 ? std::sqrt(s) : 0.0;
+}
+
+// MEPP2 matching_multires_update: sub-triangle areas from the corner distances.
+std::array<double, 3> heron_areas(const HalfedgeMesh& mesh, std::uint32_t face, const Vec3& q) {
+  const Triangle& t = mesh.triangles[face];
+  const Vec3 &x1 = mesh.positions[t[0]], &x2 = mesh.positions[t[1]], &x3 = mesh.positions[t[2]];
+  const double l1 = distance(x3, x2), l2 = distance(x1, x3), l3 = distance(x1, x2);
+  const double t1 = distance(x1, q), t2 = distance(x2, q), t3 = distance(x3, q);
+  const double p1 = (l1 + t2 + t3) / 2, p2 = (t1 + l2 + t3) / 2, p3 = (t1 + t2 + l3) / 2;
+  return {heron_area(p1, l1, t3, t2), heron_area(p2, l2, t3, t1), heron_area(p3, l3, t1, t2)};
+}
+
+}  // namespace
+
+std::vector<SurfaceMatch> match_to_surface(const std::vector<Vec3>& queries,
+                                           const HalfedgeMesh& target, HeronAnchor anchor) {
+  const FaceTriangleMap triangles{&target};
+  const FacePointMap points{&target};
+  Tree tree(boost::counting_iterator<std::uint32_t>(0),
+            boost::counting_iterator<std::uint32_t>(
+                static_cast<std::uint32_t>(target.triangles.size())),
+            triangles, points);
+  tree.build();
+  tree.accelerate_distance_queries();
+  std::vector<SurfaceMatch> matches(queries.size());
+  if (queries.empty()) return matches;
+  // The first query builds the tree's lazy search structure; the others can then run in
+  // parallel on a read-only tree (MEPP2 crashed here because it skipped this).
+  auto match_one = [&](std::size_t i) {
+    const Vec3& v = queries[i];
+    const auto pp = tree.closest_point_and_primitive(Point(v[0], v[1], v[2]));
+    SurfaceMatch& m = matches[i];
+    m.point = {pp.first.x(), pp.first.y(), pp.first.z()};
+    m.face = pp.second;
+    m.areas = heron_areas(target, m.face, anchor == HeronAnchor::kProjectedPoint ? m.point : v);
+  };
+  match_one(0);
+  const auto n = static_cast<std::int64_t>(queries.size());
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (std::int64_t i = 1; i < n; ++i) match_one(static_cast<std::size_t>(i));
+  return matches;
+}
+
+double interpolate(const SurfaceMatch& m, const Triangle& t, const std::vector<double>& values) {
+  const auto& a = m.areas;
+  const double sum = a[0] + a[1] + a[2];
+  if (sum > 0) return (a[0] * values[t[0]] + a[1] * values[t[1]] + a[2] * values[t[2]]) / sum;
+  return (values[t[0]] + values[t[1]] + values[t[2]]) / 3;
+}
+
+}  // namespace qm3d::mesh::detail

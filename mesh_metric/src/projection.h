@@ -1,0 +1,35 @@
+// Closest-point correspondence between a vertex set and a triangle mesh (CGAL AABB tree), and
+// MEPP2's Heron-formula interpolation of vertex attributes at the matched point. Internal.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "halfedge_mesh.h"
+
+namespace qm3d::mesh::detail {
+
+/// The closest point on the target surface and the Heron sub-triangle areas used to interpolate
+/// the target's vertex attributes there (SPEC-CMDM 1.6).
+struct SurfaceMatch {
+  Vec3 point{};
+  std::uint32_t face = 0;
+  std::array<double, 3> areas{};  ///< a1, a2, a3: areas opposite each corner of `face`
+};
+
+/// Which point the Heron distances are measured from.
+enum class HeronAnchor {
+  kProjectedPoint,  ///< CMDM: the matched point q(v) on the surface
+  kQueryPoint,      ///< MSDM2: the query vertex itself (off the surface)
+};
+
+/// For each query, the closest point on `target` and its interpolation areas. Parallel.
+std::vector<SurfaceMatch> match_to_surface(const std::vector<Vec3>& queries,
+                                           const HalfedgeMesh& target, HeronAnchor anchor);
+
+/// (a1 x1 + a2 x2 + a3 x3) / (a1 + a2 + a3), or the plain average when all areas are 0,
+/// written as MEPP2's matching_multires_update does.
+double interpolate(const SurfaceMatch& m, const Triangle& t, const std::vector<double>& values);
+
+}  // namespace qm3d::mesh::detail

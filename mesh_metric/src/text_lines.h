@@ -1,0 +1,76 @@
+// Line and number scanning for the text mesh formats (OBJ, OFF). Internal.
+#pragma once
+
+#include <charconv>
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace qm3d::mesh::detail {
+
+/// Iterates over the lines of a buffer, stripping '#' comments and trailing '\r'.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+
+  /// Next line that is not blank after comment removal; false at the end.
+  bool next(std::string_view& line) {
+    while (pos_ < text_.size()) {
+      const std::size_t end = std::min(text_.find('\n', pos_), text_.size());
+      std::string_view l = text_.substr(pos_, end - pos_);
+      pos_ = end + 1;
+      ++line_no_;
+      if (const auto hash = l.find('#'); hash != std::string_view::npos) l = l.substr(0, hash);
+      if (l.find_first_not_of(" \t\r\f\v") == std::string_view::npos) continue;
+      line = l;
+      return true;
+    }
+    return false;
+  }
+
+  std::size_t line_number() const { return line_no_; }
+  std::size_t remaining_bytes() const { return pos_ < text_.size() ? text_.size() - pos_ : 0; }
+
+ private:
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  std::size_t line_no_ = 0;
+};
+
+/// Splits a line into whitespace-separated tokens, one at a time.
+class Tokens {
+ public:
+  explicit Tokens(std::string_view line) : line_(line) {}
+
+  bool next(std::string_view& token) {
+    const auto begin = line_.find_first_not_of(" \t\r\f\v", pos_);
+    if (begin == std::string_view::npos) return false;
+    auto end = line_.find_first_of(" \t\r\f\v", begin);
+    if (end == std::string_view::npos) end = line_.size();
+    token = line_.substr(begin, end - begin);
+    pos_ = end;
+    return true;
+  }
+
+ private:
+  std::string_view line_;
+  std::size_t pos_ = 0;
+};
+
+/// Parses a whole token as a double; false when it is not a number.
+inline bool parse_double(std::string_view token, double& value) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  const auto* end = token.data() + token.size();
+  const auto result = std::from_chars(token.data(), end, value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+/// Parses a whole token as a (possibly negative) integer.
+inline bool parse_long(std::string_view token, long long& value) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  const auto* end = token.data() + token.size();
+  const auto result = std::from_chars(token.data(), end, value);
+  return result.ec == std::errc() && result.ptr == end;
+}
+
+}  // namespace qm3d::mesh::detail

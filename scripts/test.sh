@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Runs the whole qm3d test suite with ctest (building first if needed).
+#
+#   scripts/test.sh              # normal Release build in build/
+#   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+JOBS="${QM3D_JOBS:-$(nproc)}"
+BUILD_DIR="${QM3D_BUILD_DIR:-$ROOT/build}"
+EXTRA=()
+if [ "${1:-}" = "--sanitize" ]; then
+  BUILD_DIR="$ROOT/build-sanitize"
+  EXTRA=(-DQM3D_SANITIZE=ON -DQM3D_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo)
+  export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+fi
+
+if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] || [ ${#EXTRA[@]} -gt 0 ]; then
+  cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release "${EXTRA[@]}" >/dev/null
+fi
+cmake --build "$BUILD_DIR" -j "$JOBS"
+cd "$BUILD_DIR"
+ctest --output-on-failure -j "$JOBS"

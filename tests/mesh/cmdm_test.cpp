@@ -1,0 +1,175 @@
+#include "qm3d/mesh/cmdm.h"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "qm3d/common/error.h"
+#include "qm3d/mesh/mesh_io.h"
+#include "test_paths.h"
+
+namespace qm3d::mesh {
+namespace {
+
+std::filesystem::path cmdm_dir() { return test::reference_dir() / "cmdm"; }
+
+struct ReferenceRow {
+  std::string ref, dist;
+  double sym, d2r, r2d, bb_d2r, bb_r2d;
+  FeatureVector f_d2r, f_r2d;
+};
+
+std::vector<ReferenceRow> reference_rows() {
+  std::ifstream in(cmdm_dir() / "cmdm_reference.tsv");
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<ReferenceRow> rows;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    ReferenceRow r;
+    s >> r.ref >> r.dist >> r.sym >> r.d2r >> r.r2d >> r.bb_d2r >> r.bb_r2d;
+    for (double& f : r.f_d2r) s >> f;
+    for (double& f : r.f_r2d) s >> f;
+    if (s) rows.push_back(r);
+  }
+  return rows;
+}
+
+// Each reference pair is computed once and shared by the tests.
+const CmdmResult& result_for(const std::string& ref, const std::string& dist) {
+  static std::map<std::string, CmdmResult> cache;
+  const std::string key = ref + "|" + dist;
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    const auto r = read_mesh(cmdm_dir() / ref).mesh;
+    const auto d = read_mesh(cmdm_dir() / dist).mesh;
+    it = cache.emplace(key, compute_cmdm(r, d)).first;
+  }
+  return it->second;
+}
+
+void expect_score(double actual, double expected, const char* what) {
+  if (std::fabs(expected) < 1e-12) {
+    EXPECT_NEAR(actual, expected, 1e-12) << what;
+  } else {
+    EXPECT_NEAR(actual, expected, 1e-6 * std::fabs(expected)) << what;
+  }
+}
+
+void expect_direction(const CmdmDirectionResult& d, double score, double bb,
+                      const FeatureVector& f) {
+  expect_score(d.score, score, "score");
+  EXPECT_NEAR(d.bbox_max_side, bb, 1e-9);
+  for (std::size_t k = 0; k < kNumFeatures; ++k) EXPECT_NEAR(d.features[k], f[k], 1e-6) << "f" << k + 1;
+}
+
+TEST(Cmdm, MatchesEveryReferenceRow) {
+  const auto rows = reference_rows();
+  ASSERT_EQ(rows.size(), 8u);
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.ref + " vs " + row.dist);
+    const CmdmResult& r = result_for(row.ref, row.dist);
+    expect_score(r.score, row.sym, "symmetric");
+    ASSERT_TRUE(r.dist_to_ref && r.ref_to_dist);
+    expect_direction(*r.dist_to_ref, row.d2r, row.bb_d2r, row.f_d2r);
+    expect_direction(*r.ref_to_dist, row.r2d, row.bb_r2d, row.f_r2d);
+  }
+}
+
+std::vector<double> read_column(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  return v;
+}
+
+void expect_per_vertex(const std::string& ref, const std::string& dist, const std::string& stem) {
+  const CmdmResult& r = result_for(ref, dist);
+  const auto ld_dist = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_dist.txt"));
+  const auto ld_ref = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_ref.txt"));
+  ASSERT_EQ(r.dist_to_ref->local_distortion.size(), ld_dist.size());
+  ASSERT_EQ(r.ref_to_dist->local_distortion.size(), ld_ref.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < ld_dist.size(); ++i) {
+    worst = std::max(worst, std::fabs(r.dist_to_ref->local_distortion[i] - ld_dist[i]));
+  }
+  for (std::size_t i = 0; i < ld_ref.size(); ++i) {
+    worst = std::max(worst, std::fabs(r.ref_to_dist->local_distortion[i] - ld_ref[i]));
+  }
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(Cmdm, PerVertexMatchesMonkey) {
+  expect_per_vertex("monkey2.obj", "monkey_simplified.obj", "LD_monkey_simplified_vs_monkey2");
+}
+
+TEST(Cmdm, PerVertexMatchesBlob4BothNoise) {
+  expect_per_vertex("blob4_ref.off", "blob4_bothnoise.off", "LD_blob4_bothnoise_vs_blob4_ref");
+}
+
+TEST(Cmdm, ObjOffAndPlyCopiesGiveTheSameScore) {
+  const double off = result_for("blob4_ref.off", "blob4_bothnoise.off").score;
+  EXPECT_NEAR(result_for("blob4_ref.obj", "blob4_bothnoise.obj").score, off, 1e-9);
+  EXPECT_EQ(result_for("blob4_ref.ply", "blob4_bothnoise.ply").score, off);
+}
+
+TEST(Cmdm, OneAndTwoThreadsAreBitIdentical) {
+  const auto r = read_mesh(cmdm_dir() / "monkey2.obj").mesh;
+  const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const CmdmResult one = compute_cmdm(r, d);
+  omp_set_num_threads(2);
+  const CmdmResult two = compute_cmdm(r, d);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(one.score, two.score);
+  EXPECT_EQ(one.dist_to_ref->features, two.dist_to_ref->features);
+  EXPECT_EQ(one.ref_to_dist->local_distortion, two.ref_to_dist->local_distortion);
+}
+
+TEST(Cmdm, DirectionOptionComputesOnlyWhatIsAsked) {
+  const auto r = read_mesh(cmdm_dir() / "monkey2.obj").mesh;
+  const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
+  CmdmOptions o;
+  o.direction = CmdmDirection::kDistToRef;
+  const CmdmResult one = compute_cmdm(r, d, o);
+  EXPECT_TRUE(one.dist_to_ref);
+  EXPECT_FALSE(one.ref_to_dist);
+  EXPECT_EQ(one.score, result_for("monkey2.obj", "monkey_simplified.obj").dist_to_ref->score);
+}
+
+TEST(Cmdm, ScoreGrowsWithColourNoise) {
+  const double col = result_for("blob4_ref.off", "blob4_colnoise.off").score;
+  const double both = result_for("blob4_ref.off", "blob4_bothnoise.off").score;
+  const double same = result_for("blob4_ref.off", "blob4_ref.off").score;
+  EXPECT_LT(same, 1e-12);
+  EXPECT_GT(col, 100 * same);
+  EXPECT_GT(both, col);
+}
+
+TEST(Cmdm, WeightsAndScalesAreOptions) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_colnoise.off").mesh;
+  CmdmOptions o;
+  o.model.weights = {0, 0, 0, 0, 0, 0, 1, 0};  // chroma only
+  o.direction = CmdmDirection::kDistToRef;
+  const CmdmResult chroma_only = compute_cmdm(r, d, o);
+  EXPECT_DOUBLE_EQ(chroma_only.score, chroma_only.dist_to_ref->features[6]);
+  o.scales = 1;
+  EXPECT_NE(compute_cmdm(r, d, o).score, chroma_only.score);
+  o.scales = 0;
+  EXPECT_THROW(compute_cmdm(r, d, o), std::invalid_argument);
+}
+
+TEST(Cmdm, ZeroSizeMeshIsANumericError) {
+  ColoredMesh flat{{{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}}};
+  EXPECT_THROW(compute_cmdm(flat, flat), NumericError);
+}
+
+}  // namespace
+}  // namespace qm3d::mesh
