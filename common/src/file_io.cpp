@@ -28,11 +28,19 @@ std::string read_file_bytes(const std::filesystem::path& path, std::uintmax_t ma
     throw InputError(path.string() + ": file too large (" + std::to_string(size) + " bytes)");
   }
   std::string bytes;
-  if (!ec) bytes.reserve(static_cast<std::size_t>(size));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
+  if (!ec) {
+    // Regular file of known size: one allocation, no intermediate copy.
+    bytes.resize(static_cast<std::size_t>(size));
+    in.read(bytes.data(), static_cast<std::streamsize>(size));
+    if (in.gcount() != static_cast<std::streamsize>(size)) {
+      throw InputError(path.string() + ": read error (file changed while reading?)");
+    }
+  } else {
+    std::ostringstream buffer;  // e.g. a pipe: size unknown
+    buffer << in.rdbuf();
+    bytes = buffer.str();
+  }
   if (in.bad()) throw InputError(path.string() + ": read error");
-  bytes = std::move(buffer).str();
   return bytes;
 }
 

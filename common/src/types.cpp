@@ -11,9 +11,14 @@ double BoundingBox::longest_side() const {
 }
 
 BoundingBox bounding_box(const std::vector<Vec3>& positions) {
-  if (positions.empty()) throw NumericError("bounding box of an empty point set");
-  BoundingBox box{positions.front(), positions.front()};
-  for (const Vec3& p : positions) {
+  return bounding_box(positions.data(), positions.data() + positions.size());
+}
+
+BoundingBox bounding_box(const Vec3* begin, const Vec3* end) {
+  if (begin == end) throw NumericError("bounding box of an empty point set");
+  BoundingBox box{*begin, *begin};
+  for (const Vec3* it = begin; it != end; ++it) {
+    const Vec3& p = *it;
     for (int k = 0; k < 3; ++k) {
       box.min[k] = std::min(box.min[k], p[k]);
       box.max[k] = std::max(box.max[k], p[k]);

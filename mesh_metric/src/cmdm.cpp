@@ -28,7 +28,7 @@ void validate(const CmdmOptions& o) {
 }
 
 double longest_side(const HalfedgeMesh& m, const std::string& name) {
-  const double bb = bounding_box(m.positions).longest_side();
+  const double bb = bounding_box(m.positions.begin(), m.positions.end()).longest_side();
   if (!(bb > 0) || !std::isfinite(bb)) {
     throw NumericError(name + ": bounding box has zero size (all vertices identical)");
   }
@@ -74,6 +74,18 @@ void accumulate_scale(const detail::MatchedFields& fields, const detail::WalkPar
   }
 }
 
+// LAB2000HL colour of each vertex of the metric's mesh (duplicated vertices share the input's).
+std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& input,
+                                  const Lab2000hlTable& table) {
+  if (input.colors.size() != input.positions.size()) {
+    throw FormatError("mesh has " + std::to_string(input.colors.size()) + " colours for " +
+                      std::to_string(input.positions.size()) + " vertices");
+  }
+  std::vector<Lab> lab = to_lab2000hl(input.colors, table);
+  for (std::size_t v = lab.size(); v < m.input_vertex.size(); ++v) lab.push_back(lab[m.input_vertex[v]]);
+  return lab;
+}
+
 // Pools the per-vertex sums over scales (MEPP2: sum over vertices / (n * scales), then weights).
 void pool_direction(const std::vector<FeatureVector>& sums, std::size_t input_vertices,
                     const CmdmOptions& options, CmdmDirectionResult& result) {
@@ -101,10 +113,8 @@ CmdmDirectionResult compute_direction(const HalfedgeMesh& first, const std::vect
   CmdmDirectionResult result;
   const double maxdim = longest_side(first, first_name);
   result.bbox_max_side = maxdim;
-  const auto matches = detail::match_to_surface(first.positions, second,
-                                                detail::HeronAnchor::kProjectedPoint);
-  std::vector<Vec3> matched_point(matches.size());
-  for (std::size_t i = 0; i < matches.size(); ++i) matched_point[i] = matches[i].point;
+  auto [matched_point, matches] = detail::match_to_surface(first.positions, second,
+                                                           detail::HeronAnchor::kProjectedPoint);
   const std::vector<Lab> lab_match = interpolate_colors(matches, second, lab2);
 
   std::vector<FeatureVector> sums(first.positions.size(), FeatureVector{});
@@ -132,8 +142,8 @@ CmdmResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& distort
   const auto table = Lab2000hlTable::shared(resolve_data_dir(options.data_dir));
   const HalfedgeMesh ref = detail::build_halfedge_mesh(reference, "reference mesh");
   const HalfedgeMesh dist = detail::build_halfedge_mesh(distorted, "distorted mesh");
-  const std::vector<Lab> lab_ref = to_lab2000hl(ref.colors, *table);
-  const std::vector<Lab> lab_dist = to_lab2000hl(dist.colors, *table);
+  const std::vector<Lab> lab_ref = vertex_lab2000hl(ref, reference, *table);
+  const std::vector<Lab> lab_dist = vertex_lab2000hl(dist, distorted, *table);
   CmdmResult result;
   for (const auto* m : {&ref, &dist}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());

@@ -20,7 +20,7 @@ using SurfaceMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 // Tries to build the mesh face by face; false when some face cannot be added (non-manifold).
-bool add_faces_directly(const std::vector<Vec3>& positions, const std::vector<Triangle>& tris,
+bool add_faces_directly(const std::vector<Vec3>& positions, const ArrayView<Triangle>& tris,
                         SurfaceMesh& sm) {
   for (const Vec3& p : positions) sm.add_vertex(Point(p[0], p[1], p[2]));
   for (const Triangle& t : tris) {
@@ -31,36 +31,34 @@ bool add_faces_directly(const std::vector<Vec3>& positions, const std::vector<Tr
   return true;
 }
 
-// Repairs a non-manifold soup by duplicating vertices; records where each vertex came from.
-void build_from_soup(HalfedgeMesh& out, std::vector<Triangle>& tris, SurfaceMesh& sm) {
+// Repairs a non-manifold soup by duplicating vertices (which become owned copies of the input's),
+// recording where each vertex came from.
+void build_from_soup(const ColoredMesh& input, std::vector<Triangle> tris, HalfedgeMesh& out,
+                     SurfaceMesh& sm) {
   std::vector<Point> points;
-  points.reserve(out.positions.size());
-  for (const Vec3& p : out.positions) points.emplace_back(p[0], p[1], p[2]);
+  points.reserve(input.positions.size());
+  for (const Vec3& p : input.positions) points.emplace_back(p[0], p[1], p[2]);
   std::vector<std::vector<std::size_t>> polygons;
   polygons.reserve(tris.size());
   for (const Triangle& t : tris) polygons.push_back({t[0], t[1], t[2]});
-  const std::size_t original = points.size();
   PMP::orient_polygon_soup(points, polygons);
   // New points are copies of original ones: map them back by their coordinates.
   std::map<std::array<double, 3>, std::uint32_t> first_index;
-  for (std::uint32_t i = 0; i < original; ++i) {
-    first_index.emplace(out.positions[i], i);
-  }
-  for (std::size_t i = original; i < points.size(); ++i) {
+  for (std::uint32_t i = 0; i < input.positions.size(); ++i) first_index.emplace(input.positions[i], i);
+  out.owned_positions = input.positions;
+  for (std::size_t i = input.positions.size(); i < points.size(); ++i) {
     const std::array<double, 3> key{points[i].x(), points[i].y(), points[i].z()};
-    const std::uint32_t src = first_index.at(key);
-    out.positions.push_back(key);
-    out.colors.push_back(out.colors[src]);
-    out.input_vertex.push_back(out.input_vertex[src]);
+    out.owned_positions.push_back(key);
+    out.input_vertex.push_back(first_index.at(key));
   }
   sm.clear();
   PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
-  tris.clear();
+  out.owned_triangles.clear();
   for (auto f : sm.faces()) {
     Triangle t{};
     int k = 0;
     for (auto v : vertices_around_face(sm.halfedge(f), sm)) t[k++] = static_cast<std::uint32_t>(v);
-    tris.push_back(t);
+    out.owned_triangles.push_back(t);
   }
 }
 
@@ -104,15 +102,15 @@ Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
   return {n[0] / len, n[1] / len, n[2] / len};
 }
 
-HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name) {
-  HalfedgeMesh out;
-  out.positions = mesh.positions;
-  out.colors = mesh.colors;
-  out.input_vertex.resize(mesh.positions.size());
-  for (std::uint32_t i = 0; i < out.input_vertex.size(); ++i) out.input_vertex[i] = i;
+namespace {
 
-  std::vector<Triangle> tris;
-  tris.reserve(mesh.triangles.size());
+template <typename T>
+ArrayView<T> view_of(const std::vector<T>& v) {
+  return ArrayView<T>{v.data(), v.size()};
+}
+
+// The input's triangles without those that repeat a vertex (owned only when some were dropped).
+void valid_triangles(const ColoredMesh& mesh, const std::string& name, HalfedgeMesh& out) {
   std::size_t repeated = 0;
   for (const Triangle& t : mesh.triangles) {
     for (auto v : t) {
@@ -121,28 +119,38 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
                           std::to_string(mesh.positions.size()) + " vertices");
       }
     }
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      ++repeated;
-      continue;
-    }
-    tris.push_back(t);
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) ++repeated;
   }
-  if (repeated > 0) {
-    out.warnings.push_back(name + ": dropped " + std::to_string(repeated) +
-                           " faces that repeat a vertex");
+  out.triangles = view_of(mesh.triangles);
+  if (repeated == 0) return;
+  for (const Triangle& t : mesh.triangles) {
+    if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) out.owned_triangles.push_back(t);
   }
-  if (tris.empty()) throw FormatError(name + ": no valid faces");
+  out.triangles = view_of(out.owned_triangles);
+  out.warnings.push_back(name + ": dropped " + std::to_string(repeated) +
+                         " faces that repeat a vertex");
+}
+
+}  // namespace
+
+HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name) {
+  HalfedgeMesh out;
+  out.positions = view_of(mesh.positions);
+  out.input_vertex.resize(mesh.positions.size());
+  for (std::uint32_t i = 0; i < out.input_vertex.size(); ++i) out.input_vertex[i] = i;
+  valid_triangles(mesh, name, out);
+  if (out.triangles.size() == 0) throw FormatError(name + ": no valid faces");
 
   SurfaceMesh sm;
-  if (!add_faces_directly(out.positions, tris, sm)) {
-    const std::size_t before = out.positions.size();
-    build_from_soup(out, tris, sm);
+  if (!add_faces_directly(mesh.positions, out.triangles, sm)) {
+    build_from_soup(mesh, {out.triangles.begin(), out.triangles.end()}, out, sm);
+    out.positions = view_of(out.owned_positions);
+    out.triangles = view_of(out.owned_triangles);
     out.warnings.push_back(name + ": non-manifold mesh repaired by duplicating " +
-                           std::to_string(out.positions.size() - before) +
+                           std::to_string(out.positions.size() - mesh.positions.size()) +
                            " vertices (and re-orienting faces where needed)");
   }
   out.rings = extract_rings(sm);
-  out.triangles = std::move(tris);
   out.face_normals.resize(out.triangles.size());
   for (std::size_t f = 0; f < out.triangles.size(); ++f) {
     const Triangle& t = out.triangles[f];

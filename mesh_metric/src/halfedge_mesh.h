@@ -23,18 +23,39 @@ struct VertexRings {
   std::uint32_t end(std::uint32_t v) const { return offsets[v + 1]; }
 };
 
+/// A read-only view of an array (the input's, or one the mesh owns after a repair).
+template <typename T>
+struct ArrayView {
+  const T* ptr = nullptr;
+  std::size_t count = 0;
+
+  const T& operator[](std::size_t i) const { return ptr[i]; }
+  std::size_t size() const { return count; }
+  const T* begin() const { return ptr; }
+  const T* end() const { return ptr + count; }
+};
+
 /// A triangle mesh ready for the metric: positions, triangles, unit face normals (NaN for a
-/// collinear triangle, as MEPP2 has them), vertex rings.
+/// collinear triangle, as MEPP2 has them), vertex rings. Positions and triangles are the input
+/// mesh's own arrays (no copy) unless a repair had to change them; the input must outlive this.
 struct HalfedgeMesh {
-  std::vector<Vec3> positions;
-  std::vector<Rgb> colors;
-  std::vector<Triangle> triangles;
+  HalfedgeMesh() = default;
+  HalfedgeMesh(HalfedgeMesh&&) = default;
+  HalfedgeMesh(const HalfedgeMesh&) = delete;
+  HalfedgeMesh& operator=(const HalfedgeMesh&) = delete;
+
+  ArrayView<Vec3> positions;
+  ArrayView<Triangle> triangles;
   std::vector<Vec3> face_normals;
   VertexRings rings;
   /// Index in the input mesh of each vertex (non-manifold vertices are duplicated, like MEPP2's
   /// reader does, so a vertex of the input may appear more than once).
   std::vector<std::uint32_t> input_vertex;
   std::vector<std::string> warnings;
+
+  // Storage used only when the input had to be repaired (views above point here then).
+  std::vector<Vec3> owned_positions;
+  std::vector<Triangle> owned_triangles;
 };
 
 /// Builds the connectivity. Faces with a repeated vertex are dropped with a warning;

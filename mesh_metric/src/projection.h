@@ -10,12 +10,17 @@
 
 namespace qm3d::mesh::detail {
 
-/// The closest point on the target surface and the Heron sub-triangle areas used to interpolate
-/// the target's vertex attributes there (SPEC-CMDM 1.6).
+/// The face a query matched on the target surface and the Heron sub-triangle areas used to
+/// interpolate the target's vertex attributes there (SPEC-CMDM 1.6).
 struct SurfaceMatch {
-  Vec3 point{};
   std::uint32_t face = 0;
   std::array<double, 3> areas{};  ///< a1, a2, a3: areas opposite each corner of `face`
+};
+
+/// The closest point of each query on the target surface, and how to interpolate there.
+struct SurfaceMatches {
+  std::vector<Vec3> points;
+  std::vector<SurfaceMatch> matches;
 };
 
 /// Which point the Heron distances are measured from.
@@ -25,7 +30,7 @@ enum class HeronAnchor {
 };
 
 /// For each query, the closest point on `target` and its interpolation areas. Parallel.
-std::vector<SurfaceMatch> match_to_surface(const std::vector<Vec3>& queries,
+SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries,
                                            const HalfedgeMesh& target, HeronAnchor anchor);
 
 /// (a1 x1 + a2 x2 + a3 x3) / (a1 + a2 + a3), or the plain average when all areas are 0,

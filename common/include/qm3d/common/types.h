@@ -54,5 +54,7 @@ struct BoundingBox {
 
 /// Bounding box of a non-empty set of positions. Throws NumericError when empty.
 BoundingBox bounding_box(const std::vector<Vec3>& positions);
+/// Bounding box of the positions in [begin, end).
+BoundingBox bounding_box(const Vec3* begin, const Vec3* end);
 
 }  // namespace qm3d
