@@ -1,0 +1,228 @@
+#include "batch.h"
+
+#include <fcntl.h>
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+#include <tuple>
+
+#include "commands.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+#include "report.h"
+
+namespace qm3d::app {
+namespace {
+
+struct Pair {
+  std::string reference, distorted, metric;  // as written in the list
+};
+
+using Key = std::tuple<std::string, std::string, std::string>;
+
+std::vector<Pair> read_list(const std::filesystem::path& list) {
+  std::istringstream in(read_file_bytes(list));
+  std::vector<Pair> pairs;
+  std::string line;
+  for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
+    auto f = csv_split(line);
+    for (auto& s : f) {
+      s.erase(0, s.find_first_not_of(" \t"));
+      s.erase(s.find_last_not_of(" \t") + 1);
+    }
+    if (pairs.empty() && f[0] == "reference") continue;  // header
+    if (f.size() < 2 || f.size() > 3 || f[0].empty() || f[1].empty()) {
+      throw FormatError(list.string() + ": line " + std::to_string(line_no) +
+                        ": expected reference,distorted[,metric]");
+    }
+    pairs.push_back({f[0], f[1], f.size() == 3 && !f[2].empty() ? f[2] : "auto"});
+  }
+  if (pairs.empty()) throw FormatError(list.string() + ": no pairs");
+  return pairs;
+}
+
+// Keys of the rows already in the results; drops a trailing partial line left by a crash.
+std::set<Key> finished_pairs(const std::filesystem::path& output) {
+  std::string text = read_file_bytes(output);
+  const auto last_newline = text.find_last_of('\n');
+  const std::size_t complete = last_newline == std::string::npos ? 0 : last_newline + 1;
+  if (complete != text.size()) {
+    std::filesystem::resize_file(output, complete);
+    text.resize(complete);
+  }
+  std::set<Key> done;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto f = csv_split(line);
+    if (f.size() >= 3 && f[0] != "reference") done.emplace(f[0], f[1], f[2]);
+  }
+  return done;
+}
+
+// Appends one line with a single write(2), so a kill never leaves half a row.
+class RowWriter {
+ public:
+  explicit RowWriter(const std::filesystem::path& path) : path_(path) {
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(path.string() + ": cannot open for writing");
+  }
+  ~RowWriter() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  void write_line(const std::string& row) {
+    const std::string line = row + "\n";
+    std::lock_guard<std::mutex> lock(mutex_);
+    const ssize_t n = ::write(fd_, line.data(), line.size());
+    if (n != static_cast<ssize_t>(line.size())) {
+      throw InputError(path_.string() + ": write failed (disk full?)");
+    }
+  }
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+  std::mutex mutex_;
+};
+
+std::filesystem::path resolve(const std::filesystem::path& list, const std::string& p) {
+  const std::filesystem::path path(p);
+  return path.is_absolute() ? path : list.parent_path() / path;
+}
+
+std::string resolved_metric(const Pair& pair, const std::filesystem::path& list) {
+  if (pair.metric != "auto") return pair.metric;
+  try {
+    return is_mesh_file(resolve(list, pair.reference)) && is_mesh_file(resolve(list, pair.distorted))
+               ? "cmdm"
+               : "pcqm";
+  } catch (const Error&) {
+    return "auto";  // the run will report why the file cannot be read
+  }
+}
+
+std::string format_duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "?";
+  std::ostringstream o;
+  const long t = std::lround(s);
+  if (t >= 3600) o << t / 3600 << "h";
+  if (t >= 60) o << (t / 60) % 60 << "m";
+  o << t % 60 << "s";
+  return o.str();
+}
+
+class Progress {
+ public:
+  Progress(std::size_t total, bool quiet)
+      : total_(total), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1),
+        start_(std::chrono::steady_clock::now()), last_(start_) {}
+
+  void done_one(bool failed) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++done_;
+    failed_ += failed ? 1 : 0;
+    if (quiet_) return;
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const double eta = elapsed / done_ * (total_ - done_);
+    if (tty_) {
+      const int width = 30;
+      const int filled = static_cast<int>(width * done_ / total_);
+      std::cerr << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
+                << done_ << "/" << total_ << " (" << failed_ << " failed)  ETA "
+                << format_duration(eta) << "   " << std::flush;
+      if (done_ == total_) std::cerr << "\n";
+    } else if (done_ == total_ || now - last_ > std::chrono::seconds(10)) {
+      std::cerr << "batch: " << done_ << "/" << total_ << " pairs done (" << failed_
+                << " failed), elapsed " << format_duration(elapsed) << ", ETA "
+                << format_duration(eta) << "\n";
+      last_ = now;
+    }
+  }
+  std::size_t failed() const { return failed_; }
+
+ private:
+  std::size_t total_, done_ = 0, failed_ = 0;
+  bool quiet_, tty_;
+  std::chrono::steady_clock::time_point start_, last_;
+  std::mutex mutex_;
+};
+
+// Scores one pair; never throws (a failure becomes the row's error). Returns the row and whether
+// the pair failed.
+std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& metric, const BatchOptions& o) {
+  const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
+  try {
+    MetricReport report;
+    if (metric == "cmdm") {
+      report = run_cmdm(ref, dist, o.cmdm);
+    } else if (metric == "pcqm") {
+      report = run_pcqm(ref, dist, o.pcqm);
+    } else {
+      throw FormatError("unknown metric '" + metric + "' (expected cmdm, pcqm or auto)");
+    }
+    report.reference = pair.reference;
+    report.distorted = pair.distorted;
+    return {csv_row(report), false};
+  } catch (const std::exception& e) {
+    return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true};
+  }
+}
+
+}  // namespace
+
+int run_batch(const BatchOptions& o) {
+  const std::vector<Pair> pairs = read_list(o.list);
+  std::set<Key> done;
+  const bool exists = std::filesystem::exists(o.output);
+  if (exists && o.resume) {
+    done = finished_pairs(o.output);
+  } else if (exists && !o.overwrite) {
+    throw InputError(o.output.string() +
+                     ": already exists (use --resume to continue it or --overwrite to replace it)");
+  } else if (exists) {
+    std::filesystem::remove(o.output);
+  }
+  std::vector<std::pair<Pair, std::string>> todo;
+  for (const Pair& p : pairs) {
+    const std::string metric = resolved_metric(p, o.list);
+    if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
+  }
+  RowWriter writer(o.output);
+  if (!exists || !o.resume || std::filesystem::file_size(o.output) == 0) {
+    writer.write_line(csv_header());
+  }
+  if (!o.quiet && todo.size() < pairs.size()) {
+    std::cerr << "batch: " << pairs.size() - todo.size() << " pairs already done, "
+              << todo.size() << " to go\n";
+  }
+  Progress progress(std::max<std::size_t>(todo.size(), 1), o.quiet || todo.empty());
+  const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(todo.size())));
+  const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    omp_set_num_threads(std::max(1, total_threads / jobs));
+    for (std::size_t i = next++; i < todo.size(); i = next++) {
+      const auto [row, failed] = score_pair(todo[i].first, todo[i].second, o);
+      writer.write_line(row);
+      progress.done_one(failed);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  return progress.failed() == 0 ? 0 : 2;
+}
+
+}  // namespace qm3d::app

@@ -1,0 +1,146 @@
+#include "commands.h"
+
+#include <chrono>
+
+#include "distortion_map.h"
+#include "qm3d/common/color.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+#include "qm3d/common/ply.h"
+#include "qm3d/mesh/mesh_io.h"
+#include "qm3d/pointcloud/cloud_io.h"
+
+namespace qm3d::app {
+namespace {
+
+DirectionReport to_report(double score, const FeatureVector& f, double bb) {
+  return DirectionReport{score, f, bb};
+}
+
+MetricReport new_report(const char* metric, const std::filesystem::path& reference,
+                        const std::filesystem::path& distorted, nlohmann::json options,
+                        double score) {
+  MetricReport r;
+  r.metric = metric;
+  r.reference = reference.string();
+  r.distorted = distorted.string();
+  r.options = std::move(options);
+  r.score = score;
+  return r;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+nlohmann::json cmdm_options_json(const mesh::CmdmOptions& o) {
+  return {{"direction", direction_name(o.direction)},
+          {"scales", o.scales},
+          {"weights", o.model.weights},
+          {"data_dir", resolve_data_dir(o.data_dir).string()}};
+}
+
+nlohmann::json pcqm_options_json(const pointcloud::PcqmOptions& o) {
+  return {{"radius", o.radius_rel},   {"knn", o.knn},
+          {"rx", o.radius_factor},    {"bbox", bbox_mode_name(o.bbox)},
+          {"symmetric", o.symmetric}, {"data_dir", resolve_data_dir(o.data_dir).string()}};
+}
+
+}  // namespace
+
+std::string direction_name(mesh::CmdmDirection d) {
+  switch (d) {
+    case mesh::CmdmDirection::kSymmetric: return "symmetric";
+    case mesh::CmdmDirection::kDistToRef: return "dist-to-ref";
+    case mesh::CmdmDirection::kRefToDist: return "ref-to-dist";
+  }
+  return "?";
+}
+
+std::string bbox_mode_name(pointcloud::BboxMode m) {
+  return m == pointcloud::BboxMode::kReference ? "reference" : "extent";
+}
+
+ColoredCloud load_cloud(const std::filesystem::path& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == "obj" || ext == "off") return mesh::read_mesh_vertices(path);
+  return pointcloud::read_cloud(path);
+}
+
+bool is_mesh_file(const std::filesystem::path& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == "obj" || ext == "off") return true;
+  if (ext != "ply") return false;
+  const ply::Header h = ply::parse_header(read_file_bytes(path), path.string());
+  for (const auto& e : h.elements) {
+    if (e.name == "face" && e.count > 0) return true;
+  }
+  return false;
+}
+
+MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const mesh::CmdmOptions& options, const std::filesystem::path& map) {
+  const auto start = std::chrono::steady_clock::now();
+  mesh::MeshFile ref = mesh::read_mesh(reference);
+  mesh::MeshFile dist = mesh::read_mesh(distorted);
+  mesh::CmdmOptions o = options;
+  o.per_vertex = !map.empty();
+  const mesh::CmdmResult r = mesh::compute_cmdm(ref.mesh, dist.mesh, o);
+  MetricReport report = new_report("cmdm", reference, distorted, cmdm_options_json(options), r.score);
+  if (r.dist_to_ref) {
+    report.dist_to_ref =
+        to_report(r.dist_to_ref->score, r.dist_to_ref->features, r.dist_to_ref->bbox_max_side);
+  }
+  if (r.ref_to_dist) {
+    report.ref_to_dist =
+        to_report(r.ref_to_dist->score, r.ref_to_dist->features, r.ref_to_dist->bbox_max_side);
+  }
+  for (const auto& warnings : {ref.warnings, dist.warnings, r.warnings}) {
+    report.warnings.insert(report.warnings.end(), warnings.begin(), warnings.end());
+  }
+  if (!map.empty()) {
+    // The iterated mesh, coloured by its local distortion (dist->ref when computed, like MEPP2).
+    const bool on_distorted = r.dist_to_ref.has_value();
+    const auto& m = on_distorted ? dist.mesh : ref.mesh;
+    write_distortion_map(map, m.positions, m.triangles,
+                         on_distorted ? r.dist_to_ref->local_distortion
+                                      : r.ref_to_dist->local_distortion);
+  }
+  report.seconds = seconds_since(start);
+  return report;
+}
+
+MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const pointcloud::PcqmOptions& options, const std::filesystem::path& map) {
+  const auto start = std::chrono::steady_clock::now();
+  const ColoredCloud ref = load_cloud(reference);
+  const ColoredCloud dist = load_cloud(distorted);
+  pointcloud::PcqmOptions o = options;
+  o.per_point = !map.empty();
+  const pointcloud::PcqmResult r = pointcloud::compute_pcqm(ref, dist, o);
+  MetricReport report = new_report("pcqm", reference, distorted, pcqm_options_json(options), r.score);
+  report.ref_to_dist =
+      to_report(r.ref_to_dist.score, r.ref_to_dist.features, r.ref_to_dist.bbox_max_side);
+  if (r.dist_to_ref) {
+    report.dist_to_ref =
+        to_report(r.dist_to_ref->score, r.dist_to_ref->features, r.dist_to_ref->bbox_max_side);
+  }
+  report.warnings = r.warnings;
+  if (!map.empty()) write_distortion_map(map, ref.positions, {}, r.ref_to_dist.per_point);
+  report.seconds = seconds_since(start);
+  return report;
+}
+
+std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
+                                      const std::filesystem::path& distorted,
+                                      const mesh::CmdmOptions& cmdm,
+                                      const pointcloud::PcqmOptions& pcqm) {
+  std::vector<MetricReport> reports;
+  if (is_mesh_file(reference) && is_mesh_file(distorted)) {
+    reports.push_back(run_cmdm(reference, distorted, cmdm));
+  }
+  reports.push_back(run_pcqm(reference, distorted, pcqm));
+  return reports;
+}
+
+}  // namespace qm3d::app

@@ -1,0 +1,41 @@
+// The metric commands of the qm3d tool: load the inputs, call the libraries, build reports.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "qm3d/mesh/cmdm.h"
+#include "qm3d/pointcloud/pcqm.h"
+#include "report.h"
+
+namespace qm3d::app {
+
+/// Reads any supported file as a point cloud: PLY / PCD through the cloud reader, OBJ / OFF as
+/// the cloud of the mesh's vertices.
+ColoredCloud load_cloud(const std::filesystem::path& path);
+
+/// True when the file is a mesh format with faces (OBJ, OFF, or a PLY with a face element).
+bool is_mesh_file(const std::filesystem::path& path);
+
+/// CMDM on a pair of mesh files; writes the distortion map when `map` is not empty.
+MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const mesh::CmdmOptions& options, const std::filesystem::path& map = {});
+
+/// PCQM on a pair of cloud (or mesh) files; writes the distortion map when `map` is not empty.
+MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const pointcloud::PcqmOptions& options,
+                      const std::filesystem::path& map = {});
+
+/// Every metric that applies to the pair: CMDM and PCQM (on the vertices) for two meshes, PCQM
+/// for clouds.
+std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
+                                      const std::filesystem::path& distorted,
+                                      const mesh::CmdmOptions& cmdm,
+                                      const pointcloud::PcqmOptions& pcqm);
+
+/// Option values as the tool names them (for --help and the JSON "options" echo).
+std::string direction_name(mesh::CmdmDirection d);
+std::string bbox_mode_name(pointcloud::BboxMode m);
+
+}  // namespace qm3d::app

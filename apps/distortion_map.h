@@ -1,0 +1,20 @@
+// Writing per-vertex / per-point distortion as a PLY file to open in MeshLab or CloudCompare.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "qm3d/common/types.h"
+
+namespace qm3d::app {
+
+/// Writes a binary PLY with the positions, a float `distortion` property holding `values`, and a
+/// heat-map colour (blue = lowest value of the object, red = highest), plus the triangles (empty
+/// for a point cloud). Written atomically: never a partial file.
+void write_distortion_map(const std::filesystem::path& path, const std::vector<Vec3>& positions,
+                          const std::vector<Triangle>& triangles, const std::vector<double>& values);
+
+/// Heat-map colour of t in [0, 1]: blue, cyan, green, yellow, red.
+std::array<std::uint8_t, 3> heat_color(double t);
+
+}  // namespace qm3d::app

@@ -1,0 +1,290 @@
+// End-to-end tests of the built `qm3d` binary.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fcntl.h>
+
+#include <chrono>
+#include <cstring>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "qm3d/common/ply.h"
+#include "qm3d/mesh/cmdm.h"
+#include "qm3d/mesh/mesh_io.h"
+#include "test_paths.h"
+
+namespace qm3d {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           (std::string("qm3d_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "cwd");
+    fs::create_directories(dir_ / "io");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs qm3d with `args` in an empty working directory (checked to stay empty).
+  CliRun qm3d(const std::string& args, bool expect_clean_cwd = true) {
+    const fs::path out = dir_ / "io" / "stdout", err = dir_ / "io" / "stderr";
+    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && '" + QM3D_BINARY + "' " + args +
+                            " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    if (expect_clean_cwd) {
+      EXPECT_TRUE(fs::is_empty(dir_ / "cwd")) << "qm3d " << args << " wrote into the working directory";
+    }
+    return r;
+  }
+
+  static std::string cmdm_file(const std::string& name) {
+    return (test::reference_dir() / "cmdm" / name).string();
+  }
+  static std::string pcqm_file(const std::string& name) {
+    return (test::reference_dir() / "pcqm" / name).string();
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, CmdmJsonMatchesTheReference) {
+  const CliRun r = qm3d("cmdm " + cmdm_file("monkey2.obj") + " " + cmdm_file("monkey_simplified.obj") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["metric"], "cmdm");
+  EXPECT_EQ(j["reference"], cmdm_file("monkey2.obj"));
+  EXPECT_TRUE(j.contains("version"));
+  EXPECT_EQ(j["options"]["direction"], "symmetric");
+  EXPECT_NEAR(j["score"].get<double>(), 0.042102648176200012, 1e-6 * 0.0421);
+  const auto& d2r = j["directions"]["dist_to_ref"];
+  EXPECT_NEAR(d2r["score"].get<double>(), 0.030395490491200248, 1e-6 * 0.0304);
+  EXPECT_NEAR(d2r["bbox_max_side"].get<double>(), 100.622654, 1e-9);
+  EXPECT_NEAR(d2r["features"]["f7"].get<double>(), 0.019121828146305007, 1e-6);
+  EXPECT_NEAR(j["directions"]["ref_to_dist"]["score"].get<double>(), 0.05380980586119978, 1e-6 * 0.0538);
+}
+
+TEST_F(Cli, CmdmDirectionLeavesTheOtherOut) {
+  const CliRun r = qm3d("cmdm " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_colnoise.off") +
+                     " --direction dist-to-ref --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["directions"].contains("dist_to_ref"));
+  EXPECT_FALSE(j["directions"].contains("ref_to_dist"));
+}
+
+TEST_F(Cli, PcqmJsonMatchesTheReference) {
+  const CliRun r = qm3d("pcqm " + pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_cnoise10.ply") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["metric"], "pcqm");
+  EXPECT_NEAR(j["score"].get<double>(), 0.012322561648393961, 1e-6 * 0.0123);
+  EXPECT_NEAR(j["features"]["F5"].get<double>(), 0.67531045235576315, 1e-6);
+  EXPECT_TRUE(j.contains("bbox_max_side"));
+  EXPECT_FALSE(j.contains("directions"));
+}
+
+TEST_F(Cli, HumanLineAndCsvAndOutputFile) {
+  const std::string pair = cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_bothnoise.off");
+  const CliRun text = qm3d("cmdm " + pair);
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_EQ(text.out.rfind("CMDM = 0.0373756  (dist\u2192ref 0.0398498, ref\u2192dist 0.0349014)", 0), 0u) << text.out;
+  const CliRun csv = qm3d("cmdm " + pair + " --csv");
+  std::istringstream lines(csv.out);
+  std::string header, row;
+  std::getline(lines, header);
+  std::getline(lines, row);
+  EXPECT_EQ(header.rfind("reference,distorted,metric,score,status,error,seconds,dist_to_ref_score", 0), 0u);
+  EXPECT_NE(row.find(",cmdm,0.03737558"), std::string::npos) << row;
+  const fs::path out = dir_ / "io" / "result.json";
+  const CliRun file = qm3d("cmdm " + pair + " --json -o " + out.string());
+  EXPECT_EQ(file.out, "");
+  EXPECT_NEAR(nlohmann::json::parse(slurp(out))["score"].get<double>(), 0.037375586055240086, 1e-8);
+}
+
+TEST_F(Cli, EveryMeshFormatGivesTheSameScore) {
+  std::set<std::string> lines;
+  for (const char* ext : {"obj", "off", "ply"}) {
+    const CliRun r = qm3d(std::string("cmdm ") + cmdm_file(std::string("blob4_ref.") + ext) + " " +
+                       cmdm_file(std::string("blob4_geonoise.") + ext));
+    ASSERT_EQ(r.code, 0) << r.err;
+    lines.insert(r.out);
+  }
+  EXPECT_EQ(lines.size(), 1u);
+}
+
+TEST_F(Cli, MapIsWrittenAndHoldsTheLibrarysPerVertexValues) {
+  const fs::path map = dir_ / "io" / "map.ply";
+  const std::string ref = cmdm_file("blob4_ref.off"), dist = cmdm_file("blob4_bothnoise.off");
+  const CliRun r = qm3d("cmdm " + ref + " " + dist + " --map " + map.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string bytes = slurp(map);
+  EXPECT_NE(bytes.find("property float distortion"), std::string::npos);
+  const ply::Content c = ply::read(map);
+  const mesh::MeshFile d = mesh::read_mesh(dist);
+  ASSERT_EQ(c.positions.size(), d.mesh.num_vertices());
+  EXPECT_EQ(c.face_offsets.size(), d.mesh.triangles.size() + 1);
+  // Values: read the float property by hand from the binary body.
+  const auto lib = mesh::compute_cmdm(mesh::read_mesh(ref).mesh, d.mesh);
+  const std::size_t body = bytes.find("end_header\n") + 11;
+  const std::size_t stride = 3 * 8 + 3 + 4;  // double xyz, uchar rgb, float distortion
+  for (std::size_t i = 0; i < c.positions.size(); i += 97) {
+    float v;
+    std::memcpy(&v, bytes.data() + body + i * stride + 27, 4);
+    EXPECT_EQ(v, static_cast<float>(lib.dist_to_ref->local_distortion[i])) << i;
+  }
+}
+
+TEST_F(Cli, PcqmMapIsThePerPointDistortionOfTheReference) {
+  const fs::path map = dir_ / "io" / "cloud_map.ply";
+  const CliRun r = qm3d("pcqm " + pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_cnoise10.ply") +
+                     " --map " + map.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const ply::Content c = ply::read(map);
+  EXPECT_EQ(c.positions.size(), 50000u);
+  EXPECT_EQ(c.face_offsets.size(), 1u);
+}
+
+TEST_F(Cli, CompareRunsEveryMetricThatApplies) {
+  const CliRun r = qm3d("compare " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_colnoise.off") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["metrics"].contains("cmdm"));
+  EXPECT_TRUE(j["metrics"].contains("pcqm"));
+  EXPECT_TRUE(std::isfinite(j["metrics"]["pcqm"]["score"].get<double>()));
+  const CliRun clouds = qm3d("compare " + pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_down0.5.ply"));
+  ASSERT_EQ(clouds.code, 0) << clouds.err;
+  EXPECT_EQ(clouds.out.rfind("PCQM = ", 0), 0u) << clouds.out;
+}
+
+TEST_F(Cli, BadInputIsOneLineAndExitCode2) {
+  const CliRun missing = qm3d("cmdm /nonexistent/a.obj " + cmdm_file("blob4_ref.off"));
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_EQ(missing.err, "qm3d: error: /nonexistent/a.obj: no such file\n");
+  const CliRun cloud = qm3d("cmdm " + pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_ref.ply"));
+  EXPECT_EQ(cloud.code, 2);
+  EXPECT_NE(cloud.err.find("no faces"), std::string::npos) << cloud.err;
+  EXPECT_EQ(std::count(cloud.err.begin(), cloud.err.end(), '\n'), 1);
+  const CliRun tables = qm3d("--data-dir /nonexistent cmdm " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_ref.off"));
+  EXPECT_EQ(tables.code, 2);
+  EXPECT_NE(tables.err.find("LAB2000HL table directory /nonexistent"), std::string::npos) << tables.err;
+}
+
+TEST_F(Cli, UsageErrorsExit1AndHelpListsDefaults) {
+  EXPECT_EQ(qm3d("cmdm --no-such-option a b").code, 1);
+  EXPECT_EQ(qm3d("").code, 1);
+  EXPECT_EQ(qm3d("cmdm a b --scales 0").code, 1);
+  const CliRun help = qm3d("pcqm --help");
+  EXPECT_EQ(help.code, 0);
+  for (const char* opt : {"--radius", "0.004", "--knn", "20", "--rx", "--bbox", "--symmetric", "--json",
+                          "--csv", "--map", "--threads", "--data-dir"}) {
+    EXPECT_NE(help.out.find(opt), std::string::npos) << opt;
+  }
+  const CliRun version = qm3d("--version");
+  EXPECT_EQ(version.code, 0);
+  EXPECT_EQ(version.out.rfind("qm3d ", 0), 0u);
+}
+
+TEST_F(Cli, DemoScoresTheBundledData) {
+  const CliRun r = qm3d("demo");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("geometric + colour noise"), std::string::npos);
+}
+
+// --- batch -------------------------------------------------------------------------------------
+
+std::map<std::string, int> count_rows(const std::string& csv, int* errors) {
+  std::map<std::string, int> rows;
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  *errors = 0;
+  while (std::getline(in, line)) {
+    const auto c1 = line.find(','), c2 = line.find(',', c1 + 1);
+    rows[line.substr(0, c2)]++;
+    if (line.find(",error,") != std::string::npos) ++*errors;
+  }
+  return rows;
+}
+
+TEST_F(Cli, BatchRecordsAFailingPairAndGoesOn) {
+  const fs::path list = dir_ / "io" / "list.csv", results = dir_ / "io" / "results.csv";
+  std::ofstream(list) << "reference,distorted,metric\n"
+                      << cmdm_file("blob4_ref.off") << "," << cmdm_file("blob4_colnoise.off") << ",cmdm\n"
+                      << cmdm_file("blob4_ref.off") << ",missing.off,cmdm\n"
+                      << pcqm_file("sphere_50k_ref.ply") << "," << pcqm_file("sphere_50k_cnoise10.ply") << "\n";
+  const CliRun r = qm3d("batch " + list.string() + " -o " + results.string() + " --quiet");
+  EXPECT_EQ(r.code, 2) << r.err;
+  int errors = 0;
+  const auto rows = count_rows(slurp(results), &errors);
+  EXPECT_EQ(rows.size(), 3u);
+  EXPECT_EQ(errors, 1);
+  EXPECT_NE(slurp(results).find("missing.off: no such file"), std::string::npos);
+  EXPECT_NE(slurp(results).find(",pcqm,0.0123225"), std::string::npos);  // auto -> pcqm for clouds
+  // An existing result file is not overwritten by accident.
+  EXPECT_EQ(qm3d("batch " + list.string() + " -o " + results.string()).code, 2);
+}
+
+TEST_F(Cli, BatchKilledMidRunResumesWithEveryPairOnce) {
+  const fs::path list = dir_ / "io" / "list.csv", results = dir_ / "io" / "results.csv";
+  std::ofstream l(list);
+  const char* dists[] = {"blob4_ref.off", "blob4_geonoise.off", "blob4_colnoise.off",
+                         "blob4_bothnoise.off", "blob4_geonoise.obj", "blob4_colnoise.obj",
+                         "blob4_bothnoise.obj", "blob4_geonoise.ply"};
+  for (const char* d : dists) l << cmdm_file("blob4_ref.off") << "," << cmdm_file(d) << ",cmdm\n";
+  l.close();
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, 2);
+    execl(QM3D_BINARY, "qm3d", "--threads", "1", "batch", list.c_str(), "-o", results.c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait for at least two finished rows, then kill without warning.
+  for (int i = 0; i < 600; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    const std::string s = fs::exists(results) ? slurp(results) : "";
+    if (std::count(s.begin(), s.end(), '\n') >= 3) break;
+  }
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const std::string partial = slurp(results);
+  ASSERT_FALSE(partial.empty());
+  EXPECT_EQ(partial.back(), '\n');  // no half-written line
+  const CliRun resumed = qm3d("batch " + list.string() + " -o " + results.string() + " --resume --quiet");
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  int errors = 0;
+  const auto rows = count_rows(slurp(results), &errors);
+  EXPECT_EQ(errors, 0);
+  ASSERT_EQ(rows.size(), std::size(dists));
+  for (const auto& [pair, n] : rows) EXPECT_EQ(n, 1) << pair;
+}
+
+}  // namespace
+}  // namespace qm3d
