@@ -1,6 +1,8 @@
 #include "qm3d/mesh/cmdm.h"
 
 #include <cmath>
+#include <deque>
+#include <future>
 #include <stdexcept>
 
 #include "curvature.h"
@@ -105,13 +107,41 @@ void pool_direction(const std::vector<FeatureVector>& sums, std::size_t input_ve
   }
 }
 
+// Processed curvature of a mesh at one radius, remembered for the other direction when both
+// directions use the same radii (same bounding-box size, e.g. colour-only distortions).
+class CurvatureCache {
+ public:
+  explicit CurvatureCache(bool enabled) : enabled_(enabled) {}
+
+  const std::vector<double>& get(const HalfedgeMesh& mesh, double radius, double maxdim) {
+    for (const Entry& e : entries_) {
+      if (e.mesh == &mesh && e.radius == radius && e.maxdim == maxdim) return e.values;
+    }
+    // Without reuse only the current scale's pair is kept (popping the front of a deque leaves
+    // references to the other entries valid).
+    if (!enabled_ && entries_.size() >= 2) entries_.pop_front();
+    entries_.push_back({&mesh, radius, maxdim,
+                        detail::processed_curvature(mesh, radius, maxdim,
+                                                    detail::CurvatureVariant::kCmdm)});
+    return entries_.back().values;
+  }
+
+ private:
+  struct Entry {
+    const HalfedgeMesh* mesh;
+    double radius, maxdim;
+    std::vector<double> values;
+  };
+  bool enabled_;
+  std::deque<Entry> entries_;  // stable references while growing
+};
+
 // One direction: iterate `first`'s vertices, match them on `second` (SPEC-CMDM 1.4-1.9).
 CmdmDirectionResult compute_direction(const HalfedgeMesh& first, const std::vector<Lab>& lab1,
                                       const HalfedgeMesh& second, const std::vector<Lab>& lab2,
-                                      const CmdmOptions& options, const std::string& first_name,
-                                      std::size_t input_vertices) {
+                                      const CmdmOptions& options, double maxdim,
+                                      std::size_t input_vertices, CurvatureCache& curvatures) {
   CmdmDirectionResult result;
-  const double maxdim = longest_side(first, first_name);
   result.bbox_max_side = maxdim;
   auto [matched_point, matches] = detail::match_to_surface(first.positions, second,
                                                            detail::HeronAnchor::kProjectedPoint);
@@ -120,11 +150,8 @@ CmdmDirectionResult compute_direction(const HalfedgeMesh& first, const std::vect
   std::vector<FeatureVector> sums(first.positions.size(), FeatureVector{});
   double rc = kFirstCurvatureRadius;
   for (int level = 0; level < options.scales; ++level) {
-    const auto curv1 = detail::processed_curvature(first, maxdim * rc, maxdim,
-                                                   detail::CurvatureVariant::kCmdm);
-    const auto curv2 = detail::processed_curvature(second, maxdim * rc, maxdim,
-                                                   detail::CurvatureVariant::kCmdm);
-    const auto curv_match = interpolate_all(matches, second, curv2);
+    const auto& curv1 = curvatures.get(first, maxdim * rc, maxdim);
+    const auto curv_match = interpolate_all(matches, second, curvatures.get(second, maxdim * rc, maxdim));
     const detail::MatchedFields fields{&first, &matched_point, &curv1, &curv_match, &lab1, &lab_match};
     const double h = rc * kNeighbourhoodFactor * maxdim;
     accumulate_scale(fields, {h, h / 3, /*strict_outward_test=*/false}, sums);
@@ -140,21 +167,29 @@ CmdmResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& distort
                         const CmdmOptions& options) {
   validate(options);
   const auto table = Lab2000hlTable::shared(resolve_data_dir(options.data_dir));
-  const HalfedgeMesh ref = detail::build_halfedge_mesh(reference, "reference mesh");
+  // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
+  auto ref_task = std::async(std::launch::async, [&] {
+    return detail::build_halfedge_mesh(reference, "reference mesh");
+  });
   const HalfedgeMesh dist = detail::build_halfedge_mesh(distorted, "distorted mesh");
+  const HalfedgeMesh ref = ref_task.get();
   const std::vector<Lab> lab_ref = vertex_lab2000hl(ref, reference, *table);
   const std::vector<Lab> lab_dist = vertex_lab2000hl(dist, distorted, *table);
   CmdmResult result;
   for (const auto* m : {&ref, &dist}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
+  const bool both = options.direction == CmdmDirection::kSymmetric;
+  const double bb_dist = longest_side(dist, "distorted mesh");
+  const double bb_ref = longest_side(ref, "reference mesh");
+  CurvatureCache curvatures(both && bb_dist == bb_ref);
   if (options.direction != CmdmDirection::kRefToDist) {
-    result.dist_to_ref = compute_direction(dist, lab_dist, ref, lab_ref, options, "distorted mesh",
-                                           distorted.positions.size());
+    result.dist_to_ref = compute_direction(dist, lab_dist, ref, lab_ref, options, bb_dist,
+                                           distorted.positions.size(), curvatures);
   }
   if (options.direction != CmdmDirection::kDistToRef) {
-    result.ref_to_dist = compute_direction(ref, lab_ref, dist, lab_dist, options, "reference mesh",
-                                           reference.positions.size());
+    result.ref_to_dist = compute_direction(ref, lab_ref, dist, lab_dist, options, bb_ref,
+                                           reference.positions.size(), curvatures);
   }
   if (result.dist_to_ref && result.ref_to_dist) {
     result.score = (result.dist_to_ref->score + result.ref_to_dist->score) / 2;

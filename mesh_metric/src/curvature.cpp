@@ -14,67 +14,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// MEPP2's asin: the sine is clamped to [-1, 1] first.
-double asin_clamped(double s) { return std::asin(std::clamp(s, -1.0, 1.0)); }
-
-bool face_collapsed(const HalfedgeMesh& m, std::int32_t f) {
-  const Triangle& t = m.triangles[f];
-  return m.positions[t[0]] == m.positions[t[1]] && m.positions[t[1]] == m.positions[t[2]];
-}
-
-// MEPP2's search for a usable neighbouring face when one of the two faces of an edge is
-// collinear (NaN normal), curvature_cmdm.hpp "Case 2" / "Case 3". Half-edge k is (w -> v).
-// Returns the dihedral angle or 0 when no face is found.
-double beta_with_replacement(const HalfedgeMesh& m, std::uint32_t v, std::uint32_t k,
-                             const Vec3& vec, double len, bool replace_second) {
-  const VertexRings& r = m.rings;
-  const std::uint32_t w = r.source[k];
-  const std::int32_t kept_face = replace_second ? r.face[k] : r.opposite_face[k];
-  const Vec3& kept = m.face_normals[kept_face];
-  Vec3 destination = m.positions[v];
-  std::vector<std::uint32_t> stack{w};
-  std::vector<std::uint32_t> seen{w};
-  while (!stack.empty()) {
-    const std::uint32_t t = stack.back();
-    stack.pop_back();
-    for (std::uint32_t k2 = r.begin(t); k2 < r.end(t); ++k2) {
-      const std::uint32_t s = r.source[k2];
-      if (m.positions[s] != destination) continue;
-      const std::int32_t nf = r.face[k2];
-      if (nf == kNoFace) continue;
-      const Vec3& n = m.face_normals[nf];
-      if (!has_nan(n) && nf != kept_face) {
-        const Vec3 cp = replace_second ? cross(kept, n) : cross(n, kept);
-        return asin_clamped(dot(cp, vec) / len);
-      }
-      if (std::find(seen.begin(), seen.end(), s) == seen.end()) {
-        stack.push_back(s);
-        seen.push_back(s);
-      }
-    }
-    destination = m.positions[w];
-  }
-  return 0.0;
-}
-
-// Signed dihedral angle of the edge of half-edge k, as MEPP2 computes it (SPEC-CMDM 1.5 step 4);
-// NaN when the edge must be skipped (a collapsed face).
-double edge_beta(const HalfedgeMesh& m, std::uint32_t v, std::uint32_t k, const Vec3& vec,
-                 double len) {
-  const std::int32_t f1 = m.rings.face[k], f2 = m.rings.opposite_face[k];
-  if (face_collapsed(m, f1) || face_collapsed(m, f2)) return std::numeric_limits<double>::quiet_NaN();
-  const Vec3& n1 = m.face_normals[f1];
-  const Vec3& n2 = m.face_normals[f2];
-  const bool nan1 = has_nan(n1), nan2 = has_nan(n2);
-  if (!nan1 && !nan2) {
-    const double cosine = dot(n1, n2) / std::sqrt(dot(n1, n1) * dot(n2, n2));
-    if (cosine == -1) return 0.0;  // opposite normals: MEPP2's shadowed `beta = pi/2` leaves 0
-    return asin_clamped(dot(cross(n1, n2), vec) / len);
-  }
-  if (nan1 && nan2) return 0.0;
-  return beta_with_replacement(m, v, k, vec, len, /*replace_second=*/nan2);
-}
-
 void add_edge_tensor(double tensor[3][3], const Vec3& vec, double coeff) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) tensor[i][j] += vec[i] * vec[j] * coeff;
@@ -101,14 +40,12 @@ void vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, CurvatureV
       const bool outward = variant == CurvatureVariant::kCmdm ? along >= 0.0 : along > 0.0;
       if (v != v0 && !outward) continue;
       const bool isect = sphere_clip_vector(o, r, p, vec);
-      const bool border = rings.face[k] == kNoFace || rings.opposite_face[k] == kNoFace;
+      // Border edges and edges of a collapsed face carry a NaN angle and never contribute.
+      const double beta = rings.dihedral[k];
       const bool contributes = variant == CurvatureVariant::kCmdm ? isect : true;
-      if (!border && contributes) {
+      if (contributes && !std::isnan(beta)) {
         const double len = norm(vec);
-        if (len > 0) {
-          const double beta = edge_beta(m, v, k, vec, len);
-          if (!std::isnan(beta)) add_edge_tensor(tensor, vec, beta / len);
-        }
+        if (len > 0) add_edge_tensor(tensor, vec, beta / len);
       }
       if (!isect && scratch.visit(w)) scratch.stack.push_back(w);
     }

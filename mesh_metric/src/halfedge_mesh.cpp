@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 
+#include "dihedral.h"
 #include "qm3d/common/error.h"
 
 namespace qm3d::mesh::detail {
@@ -62,8 +63,8 @@ void build_from_soup(const ColoredMesh& input, std::vector<Triangle> tris, Halfe
   }
 }
 
-VertexRings extract_rings(const SurfaceMesh& sm) {
-  VertexRings r;
+RingFaces extract_rings(const SurfaceMesh& sm) {
+  RingFaces r;
   r.offsets.reserve(sm.number_of_vertices() + 1);
   r.offsets.push_back(0);
   const std::size_t nh = sm.number_of_halfedges();
@@ -150,12 +151,16 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
                            std::to_string(out.positions.size() - mesh.positions.size()) +
                            " vertices (and re-orienting faces where needed)");
   }
-  out.rings = extract_rings(sm);
-  out.face_normals.resize(out.triangles.size());
+  RingFaces rings = extract_rings(sm);
+  sm.clear();
+  std::vector<Vec3> normals(out.triangles.size());
   for (std::size_t f = 0; f < out.triangles.size(); ++f) {
     const Triangle& t = out.triangles[f];
-    out.face_normals[f] = face_normal(out.positions[t[0]], out.positions[t[1]], out.positions[t[2]]);
+    normals[f] = face_normal(out.positions[t[0]], out.positions[t[1]], out.positions[t[2]]);
   }
+  out.rings.dihedral = dihedral_angles({out.positions.ptr, out.triangles.ptr, normals, rings});
+  out.rings.offsets = std::move(rings.offsets);
+  out.rings.source = std::move(rings.source);
   return out;
 }
 

@@ -10,14 +10,13 @@
 
 namespace qm3d::mesh::detail {
 
-inline constexpr std::int32_t kNoFace = -1;
-
 /// Incoming half-edges (w -> v) of every vertex v, in CGAL's circulation order around v.
 struct VertexRings {
-  std::vector<std::uint32_t> offsets;   ///< #V + 1
-  std::vector<std::uint32_t> source;    ///< w of each incoming half-edge
-  std::vector<std::int32_t> face;       ///< face on the half-edge's side (kNoFace on a border)
-  std::vector<std::int32_t> opposite_face;  ///< face on the other side (kNoFace on a border)
+  std::vector<std::uint32_t> offsets;  ///< #V + 1
+  std::vector<std::uint32_t> source;   ///< w of each incoming half-edge
+  /// Signed dihedral angle of the edge (dihedral.h); NaN when the edge never contributes to the
+  /// curvature tensor (border edge, collapsed face).
+  std::vector<double> dihedral;
 
   std::uint32_t begin(std::uint32_t v) const { return offsets[v]; }
   std::uint32_t end(std::uint32_t v) const { return offsets[v + 1]; }
@@ -35,8 +34,7 @@ struct ArrayView {
   const T* end() const { return ptr + count; }
 };
 
-/// A triangle mesh ready for the metric: positions, triangles, unit face normals (NaN for a
-/// collinear triangle, as MEPP2 has them), vertex rings. Positions and triangles are the input
+/// A triangle mesh ready for the metric: positions, triangles, vertex rings with edge angles. Positions and triangles are the input
 /// mesh's own arrays (no copy) unless a repair had to change them; the input must outlive this.
 struct HalfedgeMesh {
   HalfedgeMesh() = default;
@@ -46,7 +44,6 @@ struct HalfedgeMesh {
 
   ArrayView<Vec3> positions;
   ArrayView<Triangle> triangles;
-  std::vector<Vec3> face_normals;
   VertexRings rings;
   /// Index in the input mesh of each vertex (non-manifold vertices are duplicated, like MEPP2's
   /// reader does, so a vertex of the input may appear more than once).
