@@ -163,14 +163,7 @@ class Progress {
 std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
-    MetricReport report;
-    if (metric == "cmdm") {
-      report = run_cmdm(ref, dist, o.cmdm);
-    } else if (metric == "pcqm") {
-      report = run_pcqm(ref, dist, o.pcqm);
-    } else {
-      throw FormatError("unknown metric '" + metric + "' (expected cmdm, pcqm or auto)");
-    }
+    MetricReport report = run_metric(metric, ref, dist, o.metrics);
     report.reference = pair.reference;
     report.distorted = pair.distorted;
     return {csv_row(report), false};

@@ -3,21 +3,20 @@
 
 #include <filesystem>
 
-#include "qm3d/mesh/cmdm.h"
-#include "qm3d/pointcloud/pcqm.h"
+#include "commands.h"
 
 namespace qm3d::app {
 
 struct BatchOptions {
-  std::filesystem::path list;    ///< CSV with columns reference,distorted[,metric]
+  std::filesystem::path list;    ///< CSV with columns reference,distorted[,metric]; metric is
+                                 ///< cmdm, msdm2, pcqm or auto (CMDM for meshes, else PCQM)
   std::filesystem::path output;  ///< results CSV (appended to, row by row)
   int jobs = 1;                  ///< pairs scored at the same time
   int threads = 0;               ///< total threads (0 = all cores), shared among the jobs
   bool resume = false;           ///< skip pairs already in `output`
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
-  mesh::CmdmOptions cmdm;
-  pointcloud::PcqmOptions pcqm;
+  MetricOptions metrics;
 };
 
 /// Runs the batch. Returns 0 when every pair succeeded and 2 when some failed (their rows carry

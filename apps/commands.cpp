@@ -48,11 +48,11 @@ nlohmann::json pcqm_options_json(const pointcloud::PcqmOptions& o) {
 
 }  // namespace
 
-std::string direction_name(mesh::CmdmDirection d) {
+std::string direction_name(mesh::Direction d) {
   switch (d) {
-    case mesh::CmdmDirection::kSymmetric: return "symmetric";
-    case mesh::CmdmDirection::kDistToRef: return "dist-to-ref";
-    case mesh::CmdmDirection::kRefToDist: return "ref-to-dist";
+    case mesh::Direction::kSymmetric: return "symmetric";
+    case mesh::Direction::kDistToRef: return "dist-to-ref";
+    case mesh::Direction::kRefToDist: return "ref-to-dist";
   }
   return "?";
 }
@@ -78,15 +78,9 @@ bool is_mesh_file(const std::filesystem::path& path) {
   return false;
 }
 
-MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
-                      const mesh::CmdmOptions& options, const std::filesystem::path& map) {
-  const auto start = std::chrono::steady_clock::now();
-  mesh::MeshFile ref = mesh::read_mesh(reference);
-  mesh::MeshFile dist = mesh::read_mesh(distorted);
-  mesh::CmdmOptions o = options;
-  o.per_vertex = !map.empty();
-  const mesh::CmdmResult r = mesh::compute_cmdm(ref.mesh, dist.mesh, o);
-  MetricReport report = new_report("cmdm", reference, distorted, cmdm_options_json(options), r.score);
+namespace {
+
+void add_mesh_directions(const mesh::MeshMetricResult& r, MetricReport& report) {
   if (r.dist_to_ref) {
     report.dist_to_ref =
         to_report(r.dist_to_ref->score, r.dist_to_ref->features, r.dist_to_ref->bbox_max_side);
@@ -95,19 +89,61 @@ MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesys
     report.ref_to_dist =
         to_report(r.ref_to_dist->score, r.ref_to_dist->features, r.ref_to_dist->bbox_max_side);
   }
+}
+
+// The iterated mesh, coloured by its local distortion (dist->ref when computed, like MEPP2).
+void write_mesh_map(const std::filesystem::path& map, const mesh::MeshMetricResult& r,
+                    const mesh::MeshFile& ref, const mesh::MeshFile& dist) {
+  const bool on_distorted = r.dist_to_ref.has_value();
+  const auto& m = on_distorted ? dist.mesh : ref.mesh;
+  write_distortion_map(map, m.positions, m.triangles,
+                       on_distorted ? r.dist_to_ref->local_distortion
+                                    : r.ref_to_dist->local_distortion);
+}
+
+// Reads both meshes, runs `compute`, and reports it.
+template <typename Compute>
+MetricReport run_mesh_metric(const char* metric, const std::filesystem::path& reference,
+                             const std::filesystem::path& distorted, nlohmann::json options,
+                             bool require_colors, const std::filesystem::path& map,
+                             const Compute& compute) {
+  const auto start = std::chrono::steady_clock::now();
+  const mesh::MeshFile ref = mesh::read_mesh(reference, {require_colors});
+  const mesh::MeshFile dist = mesh::read_mesh(distorted, {require_colors});
+  const mesh::MeshMetricResult r = compute(ref.mesh, dist.mesh, !map.empty());
+  MetricReport report = new_report(metric, reference, distorted, std::move(options), r.score);
+  add_mesh_directions(r, report);
   for (const auto& warnings : {ref.warnings, dist.warnings, r.warnings}) {
     report.warnings.insert(report.warnings.end(), warnings.begin(), warnings.end());
   }
-  if (!map.empty()) {
-    // The iterated mesh, coloured by its local distortion (dist->ref when computed, like MEPP2).
-    const bool on_distorted = r.dist_to_ref.has_value();
-    const auto& m = on_distorted ? dist.mesh : ref.mesh;
-    write_distortion_map(map, m.positions, m.triangles,
-                         on_distorted ? r.dist_to_ref->local_distortion
-                                      : r.ref_to_dist->local_distortion);
-  }
+  if (!map.empty()) write_mesh_map(map, r, ref, dist);
   report.seconds = seconds_since(start);
   return report;
+}
+
+}  // namespace
+
+MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const mesh::CmdmOptions& options, const std::filesystem::path& map) {
+  return run_mesh_metric("cmdm", reference, distorted, cmdm_options_json(options), true, map,
+                         [&](const ColoredMesh& r, const ColoredMesh& d, bool per_vertex) {
+                           mesh::CmdmOptions o = options;
+                           o.per_vertex = per_vertex;
+                           return mesh::compute_cmdm(r, d, o);
+                         });
+}
+
+MetricReport run_msdm2(const std::filesystem::path& reference,
+                       const std::filesystem::path& distorted, const mesh::Msdm2Options& options,
+                       const std::filesystem::path& map) {
+  const nlohmann::json json = {{"direction", direction_name(options.direction)},
+                               {"scales", options.scales}};
+  return run_mesh_metric("msdm2", reference, distorted, json, false, map,
+                         [&](const ColoredMesh& r, const ColoredMesh& d, bool per_vertex) {
+                           mesh::Msdm2Options o = options;
+                           o.per_vertex = per_vertex;
+                           return mesh::compute_msdm2(r, d, o);
+                         });
 }
 
 MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
@@ -133,14 +169,22 @@ MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesys
 
 std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
                                       const std::filesystem::path& distorted,
-                                      const mesh::CmdmOptions& cmdm,
-                                      const pointcloud::PcqmOptions& pcqm) {
+                                      const MetricOptions& options) {
   std::vector<MetricReport> reports;
   if (is_mesh_file(reference) && is_mesh_file(distorted)) {
-    reports.push_back(run_cmdm(reference, distorted, cmdm));
+    reports.push_back(run_cmdm(reference, distorted, options.cmdm));
+    reports.push_back(run_msdm2(reference, distorted, options.msdm2));
   }
-  reports.push_back(run_pcqm(reference, distorted, pcqm));
+  reports.push_back(run_pcqm(reference, distorted, options.pcqm));
   return reports;
+}
+
+MetricReport run_metric(const std::string& metric, const std::filesystem::path& reference,
+                        const std::filesystem::path& distorted, const MetricOptions& options) {
+  if (metric == "cmdm") return run_cmdm(reference, distorted, options.cmdm);
+  if (metric == "msdm2") return run_msdm2(reference, distorted, options.msdm2);
+  if (metric == "pcqm") return run_pcqm(reference, distorted, options.pcqm);
+  throw FormatError("unknown metric '" + metric + "' (expected cmdm, msdm2, pcqm or auto)");
 }
 
 }  // namespace qm3d::app

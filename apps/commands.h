@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "qm3d/mesh/cmdm.h"
+#include "qm3d/mesh/msdm2.h"
 #include "qm3d/pointcloud/pcqm.h"
 #include "report.h"
 
@@ -22,20 +23,35 @@ bool is_mesh_file(const std::filesystem::path& path);
 MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
                       const mesh::CmdmOptions& options, const std::filesystem::path& map = {});
 
+/// MSDM2 on a pair of mesh files (colours optional and ignored); map as for CMDM.
+MetricReport run_msdm2(const std::filesystem::path& reference,
+                       const std::filesystem::path& distorted, const mesh::Msdm2Options& options,
+                       const std::filesystem::path& map = {});
+
 /// PCQM on a pair of cloud (or mesh) files; writes the distortion map when `map` is not empty.
 MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
                       const pointcloud::PcqmOptions& options,
                       const std::filesystem::path& map = {});
 
-/// Every metric that applies to the pair: CMDM and PCQM (on the vertices) for two meshes, PCQM
-/// for clouds.
+/// Options of every metric, for the commands that run several.
+struct MetricOptions {
+  mesh::CmdmOptions cmdm;
+  mesh::Msdm2Options msdm2;
+  pointcloud::PcqmOptions pcqm;
+};
+
+/// Every metric that applies to the pair: CMDM, MSDM2 and PCQM (on the vertices) for two
+/// meshes, PCQM for clouds.
 std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
                                       const std::filesystem::path& distorted,
-                                      const mesh::CmdmOptions& cmdm,
-                                      const pointcloud::PcqmOptions& pcqm);
+                                      const MetricOptions& options);
+
+/// One metric by name ("cmdm", "msdm2", "pcqm"); FormatError for an unknown name.
+MetricReport run_metric(const std::string& metric, const std::filesystem::path& reference,
+                        const std::filesystem::path& distorted, const MetricOptions& options);
 
 /// Option values as the tool names them (for --help and the JSON "options" echo).
-std::string direction_name(mesh::CmdmDirection d);
+std::string direction_name(mesh::Direction d);
 std::string bbox_mode_name(pointcloud::BboxMode m);
 
 }  // namespace qm3d::app

@@ -99,10 +99,10 @@ void add_pcqm_options(CLI::App* cmd, pointcloud::PcqmOptions& o, std::string& bb
                 "Average both directions (default: reference -> distorted, as PCQM defines it)");
 }
 
-mesh::CmdmDirection parse_direction(const std::string& s) {
-  if (s == "dist-to-ref") return mesh::CmdmDirection::kDistToRef;
-  if (s == "ref-to-dist") return mesh::CmdmDirection::kRefToDist;
-  return mesh::CmdmDirection::kSymmetric;
+mesh::Direction parse_direction(const std::string& s) {
+  if (s == "dist-to-ref") return mesh::Direction::kDistToRef;
+  if (s == "ref-to-dist") return mesh::Direction::kRefToDist;
+  return mesh::Direction::kSymmetric;
 }
 
 // Writes text to stdout or, atomically, to the requested file.
@@ -166,6 +166,23 @@ int run(int argc, char** argv) {
   add_cmdm_options(cmdm_cmd, cmdm, direction, weights);
   add_output_options(cmdm_cmd, out, true);
 
+  mesh::Msdm2Options msdm2;
+  std::string msdm2_direction = "dist-to-ref";
+  auto* msdm2_cmd = app.add_subcommand(
+      "msdm2", "MSDM2 (geometry only; colours ignored) between two meshes (OBJ, OFF, PLY)");
+  add_global_options(msdm2_cmd, global);
+  msdm2_cmd->add_option("REF", ref, "Reference mesh")->required();
+  msdm2_cmd->add_option("DIST", dist, "Distorted mesh")->required();
+  msdm2_cmd->add_option("--direction", msdm2_direction,
+                        "dist-to-ref (MEPP2's example_msdm2), ref-to-dist or symmetric")
+      ->check(CLI::IsMember({"symmetric", "dist-to-ref", "ref-to-dist"}))
+      ->capture_default_str();
+  msdm2_cmd->add_option("--scales", msdm2.scales,
+                        "Number of scales (curvature radius (0.002 + 0.001 l) of BB)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  add_output_options(msdm2_cmd, out, true);
+
   auto* pcqm_cmd = app.add_subcommand("pcqm", "PCQM between two coloured point clouds (PLY, PCD; "
                                               "OBJ/OFF/PLY meshes are read as their vertices)");
   add_global_options(pcqm_cmd, global);
@@ -175,8 +192,8 @@ int run(int argc, char** argv) {
   add_output_options(pcqm_cmd, out, true);
 
   auto* compare_cmd = app.add_subcommand(
-      "compare", "Every metric that applies: CMDM and PCQM (on the vertices) for two meshes, "
-                 "PCQM for two clouds");
+      "compare", "Every metric that applies: CMDM, MSDM2 and PCQM (on the vertices) for two "
+                 "meshes, PCQM for two clouds");
   add_global_options(compare_cmd, global);
   compare_cmd->add_option("REF", ref, "Reference")->required();
   compare_cmd->add_option("DIST", dist, "Distorted")->required();
@@ -186,7 +203,7 @@ int run(int argc, char** argv) {
   std::string list, results;
   auto* batch_cmd = app.add_subcommand(
       "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = cmdm, "
-               "pcqm or auto; relative paths are relative to LIST's folder). Each row is appended "
+               "msdm2, pcqm or auto (CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's folder). Each row is appended "
                "to RESULTS as soon as it is done; a failing pair records its error in its row");
   add_global_options(batch_cmd, global);
   batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
@@ -218,11 +235,14 @@ int run(int argc, char** argv) {
   cmdm.model.provenance = weights.empty() ? cmdm.model.provenance : "--weights";
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
+  msdm2.direction = parse_direction(msdm2_direction);
+  const MetricOptions metrics{cmdm, msdm2, pcqm};
 
   std::vector<MetricReport> reports;
   if (*cmdm_cmd) reports.push_back(run_cmdm(ref, dist, cmdm, out.map));
+  if (*msdm2_cmd) reports.push_back(run_msdm2(ref, dist, msdm2, out.map));
   if (*pcqm_cmd) reports.push_back(run_pcqm(ref, dist, pcqm, out.map));
-  if (*compare_cmd) reports = run_compare(ref, dist, cmdm, pcqm);
+  if (*compare_cmd) reports = run_compare(ref, dist, metrics);
   if (!reports.empty()) {
     print_warnings(reports, global.quiet);
     emit(render(reports, out, compare_cmd->parsed()), out.output);
@@ -233,8 +253,7 @@ int run(int argc, char** argv) {
     batch.output = results;
     batch.threads = global.threads;
     batch.quiet = global.quiet;
-    batch.cmdm = cmdm;
-    batch.pcqm = pcqm;
+    batch.metrics = metrics;
     return run_batch(batch);
   }
   return run_demo(demo_dir, cmdm, pcqm, std::cout);

@@ -41,6 +41,7 @@ struct HalfedgeMesh {
   HalfedgeMesh(HalfedgeMesh&&) = default;
   HalfedgeMesh(const HalfedgeMesh&) = delete;
   HalfedgeMesh& operator=(const HalfedgeMesh&) = delete;
+  HalfedgeMesh& operator=(HalfedgeMesh&&) = default;  // vector moves keep the viewed buffers
 
   ArrayView<Vec3> positions;
   ArrayView<Triangle> triangles;

@@ -308,16 +308,17 @@ void drop_unreferenced(MeshFile& out, const std::string& file) {
   if (unused == 0) return;
   std::vector<std::uint32_t> new_index(mesh.positions.size(), 0);
   std::size_t n = 0;
+  const bool colors = !mesh.colors.empty();
   for (std::size_t i = 0; i < used.size(); ++i) {
     if (!used[i]) continue;
     new_index[i] = static_cast<std::uint32_t>(n);
     mesh.positions[n] = mesh.positions[i];
-    mesh.colors[n] = mesh.colors[i];
+    if (colors) mesh.colors[n] = mesh.colors[i];
     out.file_vertex[n] = static_cast<std::uint32_t>(i);
     ++n;
   }
   mesh.positions.resize(n);
-  mesh.colors.resize(n);
+  if (colors) mesh.colors.resize(n);
   out.file_vertex.resize(n);
   for (auto& t : mesh.triangles) {
     for (auto& v : t) v = new_index[v];
@@ -328,12 +329,14 @@ void drop_unreferenced(MeshFile& out, const std::string& file) {
 
 }  // namespace
 
-MeshFile read_mesh(const std::filesystem::path& path) {
+MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options) {
   const std::string file = path.string();
   RawMesh raw = parse_any(path);
   if (raw.positions.empty()) fail(file, "no vertices");
   MeshFile out;
-  out.mesh.colors = vertex_colors(raw, file);
+  const bool has_colors = std::any_of(raw.colors.begin(), raw.colors.end(),
+                                      [](const auto& c) { return c.has_value(); });
+  if (options.require_colors || has_colors) out.mesh.colors = vertex_colors(raw, file);
   out.mesh.triangles = triangulate(raw, file, out.warnings);
   if (out.mesh.triangles.empty()) {
     fail(file, "no faces (a point cloud? score it with `qm3d pcqm`)");

@@ -168,11 +168,29 @@ TEST_F(Cli, PcqmMapIsThePerPointDistortionOfTheReference) {
   EXPECT_EQ(c.face_offsets.size(), 1u);
 }
 
+TEST_F(Cli, Msdm2MatchesMepp2sExampleAndAcceptsUncolouredMeshes) {
+  const CliRun r = qm3d("msdm2 " + cmdm_file("monkey2.obj") + " " + cmdm_file("monkey_simplified.obj") + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["metric"], "msdm2");
+  EXPECT_NEAR(j["score"].get<double>(), 0.320592, 1e-5 * 0.320592);
+  EXPECT_FALSE(j["directions"].contains("ref_to_dist"));
+  // Geometry only: an OBJ without colours is fine for MSDM2 (and an error for CMDM).
+  const fs::path plain = dir_ / "io" / "plain.obj";
+  std::ofstream(plain) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  const CliRun m = qm3d("msdm2 " + plain.string() + " " + plain.string());
+  EXPECT_EQ(m.code, 0) << m.err;
+  ASSERT_EQ(m.out.rfind("MSDM2 = ", 0), 0u) << m.out;
+  EXPECT_LT(std::stod(m.out.substr(8)), 1e-12) << m.out;  // identical meshes
+  EXPECT_EQ(qm3d("cmdm " + plain.string() + " " + plain.string()).code, 2);
+}
+
 TEST_F(Cli, CompareRunsEveryMetricThatApplies) {
   const CliRun r = qm3d("compare " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_colnoise.off") + " --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["metrics"].contains("cmdm"));
+  EXPECT_TRUE(j["metrics"].contains("msdm2"));
   EXPECT_TRUE(j["metrics"].contains("pcqm"));
   EXPECT_TRUE(std::isfinite(j["metrics"]["pcqm"]["score"].get<double>()));
   const CliRun clouds = qm3d("compare " + pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_down0.5.ply"));
@@ -235,13 +253,15 @@ TEST_F(Cli, BatchRecordsAFailingPairAndGoesOn) {
   std::ofstream(list) << "reference,distorted,metric\n"
                       << cmdm_file("blob4_ref.off") << "," << cmdm_file("blob4_colnoise.off") << ",cmdm\n"
                       << cmdm_file("blob4_ref.off") << ",missing.off,cmdm\n"
+                      << cmdm_file("blob5_ref.off") << "," << cmdm_file("blob4_ref.off") << ",msdm2\n"
                       << pcqm_file("sphere_50k_ref.ply") << "," << pcqm_file("sphere_50k_cnoise10.ply") << "\n";
   const CliRun r = qm3d("batch " + list.string() + " -o " + results.string() + " --quiet");
   EXPECT_EQ(r.code, 2) << r.err;
   int errors = 0;
   const auto rows = count_rows(slurp(results), &errors);
-  EXPECT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows.size(), 4u);
   EXPECT_EQ(errors, 1);
+  EXPECT_NE(slurp(results).find(",msdm2,0.29911"), std::string::npos);
   EXPECT_NE(slurp(results).find("missing.off: no such file"), std::string::npos);
   EXPECT_NE(slurp(results).find(",pcqm,0.0123225"), std::string::npos);  // auto -> pcqm for clouds
   // An existing result file is not overwritten by accident.

@@ -40,8 +40,8 @@ std::vector<ReferenceRow> reference_rows() {
 }
 
 // Each reference pair is computed once and shared by the tests.
-const CmdmResult& result_for(const std::string& ref, const std::string& dist) {
-  static std::map<std::string, CmdmResult> cache;
+const MeshMetricResult& result_for(const std::string& ref, const std::string& dist) {
+  static std::map<std::string, MeshMetricResult> cache;
   const std::string key = ref + "|" + dist;
   auto it = cache.find(key);
   if (it == cache.end()) {
@@ -60,7 +60,7 @@ void expect_score(double actual, double expected, const char* what) {
   }
 }
 
-void expect_direction(const CmdmDirectionResult& d, double score, double bb,
+void expect_direction(const DirectionResult& d, double score, double bb,
                       const FeatureVector& f) {
   expect_score(d.score, score, "score");
   EXPECT_NEAR(d.bbox_max_side, bb, 1e-9);
@@ -72,7 +72,7 @@ TEST(Cmdm, MatchesEveryReferenceRow) {
   ASSERT_EQ(rows.size(), 8u);
   for (const auto& row : rows) {
     SCOPED_TRACE(row.ref + " vs " + row.dist);
-    const CmdmResult& r = result_for(row.ref, row.dist);
+    const MeshMetricResult& r = result_for(row.ref, row.dist);
     expect_score(r.score, row.sym, "symmetric");
     ASSERT_TRUE(r.dist_to_ref && r.ref_to_dist);
     expect_direction(*r.dist_to_ref, row.d2r, row.bb_d2r, row.f_d2r);
@@ -89,7 +89,7 @@ std::vector<double> read_column(const std::filesystem::path& p) {
 }
 
 void expect_per_vertex(const std::string& ref, const std::string& dist, const std::string& stem) {
-  const CmdmResult& r = result_for(ref, dist);
+  const MeshMetricResult& r = result_for(ref, dist);
   const auto ld_dist = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_dist.txt"));
   const auto ld_ref = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_ref.txt"));
   ASSERT_EQ(r.dist_to_ref->local_distortion.size(), ld_dist.size());
@@ -123,9 +123,9 @@ TEST(Cmdm, OneAndTwoThreadsAreBitIdentical) {
   const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
   const int saved = omp_get_max_threads();
   omp_set_num_threads(1);
-  const CmdmResult one = compute_cmdm(r, d);
+  const MeshMetricResult one = compute_cmdm(r, d);
   omp_set_num_threads(2);
-  const CmdmResult two = compute_cmdm(r, d);
+  const MeshMetricResult two = compute_cmdm(r, d);
   omp_set_num_threads(saved);
   EXPECT_EQ(one.score, two.score);
   EXPECT_EQ(one.dist_to_ref->features, two.dist_to_ref->features);
@@ -136,8 +136,8 @@ TEST(Cmdm, DirectionOptionComputesOnlyWhatIsAsked) {
   const auto r = read_mesh(cmdm_dir() / "monkey2.obj").mesh;
   const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
   CmdmOptions o;
-  o.direction = CmdmDirection::kDistToRef;
-  const CmdmResult one = compute_cmdm(r, d, o);
+  o.direction = Direction::kDistToRef;
+  const MeshMetricResult one = compute_cmdm(r, d, o);
   EXPECT_TRUE(one.dist_to_ref);
   EXPECT_FALSE(one.ref_to_dist);
   EXPECT_EQ(one.score, result_for("monkey2.obj", "monkey_simplified.obj").dist_to_ref->score);
@@ -157,8 +157,8 @@ TEST(Cmdm, WeightsAndScalesAreOptions) {
   const auto d = read_mesh(cmdm_dir() / "blob4_colnoise.off").mesh;
   CmdmOptions o;
   o.model.weights = {0, 0, 0, 0, 0, 0, 1, 0};  // chroma only
-  o.direction = CmdmDirection::kDistToRef;
-  const CmdmResult chroma_only = compute_cmdm(r, d, o);
+  o.direction = Direction::kDistToRef;
+  const MeshMetricResult chroma_only = compute_cmdm(r, d, o);
   EXPECT_DOUBLE_EQ(chroma_only.score, chroma_only.dist_to_ref->features[6]);
   o.scales = 1;
   EXPECT_NE(compute_cmdm(r, d, o).score, chroma_only.score);

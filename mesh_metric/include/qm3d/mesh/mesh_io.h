@@ -24,12 +24,18 @@ struct MeshFile {
   std::vector<std::uint32_t> file_vertex;
 };
 
+struct MeshReadOptions {
+  /// A mesh without vertex colours is an error (CMDM, PCQM) unless this is false (MSDM2); then
+  /// `colors` is left empty. Colours on only some vertices are always an error.
+  bool require_colors = true;
+};
+
 /// Reads a mesh, dispatching on the extension (.obj, .off, .ply; case-insensitive).
 ///
 /// Throws InputError (missing / unreadable path) or FormatError naming the file: unknown
 /// extension, malformed content, face index out of range, no vertex colours or colours on only
 /// some vertices, colour values outside [0, 255], no faces.
-MeshFile read_mesh(const std::filesystem::path& path);
+MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options = {});
 
 /// Reads only the vertices (positions and colours) of any mesh format; faces may be absent.
 /// Used to read a mesh as a point cloud.

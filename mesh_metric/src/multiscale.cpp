@@ -1,0 +1,192 @@
+#include "multiscale.h"
+
+#include <cmath>
+#include <deque>
+#include <future>
+#include <stdexcept>
+
+#include "halfedge_mesh.h"
+#include "neighbourhood.h"
+#include "qm3d/common/error.h"
+
+namespace qm3d::mesh::detail {
+namespace {
+
+// A mesh ready for the metric, with what both directions need of it.
+struct PreparedMesh {
+  HalfedgeMesh mesh;
+  std::vector<Lab> lab;       ///< LAB2000HL per vertex (empty when colour is not used)
+  double bbox_max_side = 0;
+  std::size_t input_vertices = 0;
+};
+
+double longest_side(const HalfedgeMesh& m, const std::string& name) {
+  const double bb = bounding_box(m.positions.begin(), m.positions.end()).longest_side();
+  if (!(bb > 0) || !std::isfinite(bb)) {
+    throw NumericError(name + ": bounding box has zero size (all vertices identical)");
+  }
+  return bb;
+}
+
+// LAB2000HL colour of each vertex of the metric's mesh (duplicated vertices share the input's).
+std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& input,
+                                  const Lab2000hlTable& table, const std::string& name) {
+  if (input.colors.size() != input.positions.size()) {
+    throw FormatError(name + ": " + std::to_string(input.colors.size()) + " colours for " +
+                      std::to_string(input.positions.size()) + " vertices");
+  }
+  std::vector<Lab> lab = to_lab2000hl(input.colors, table);
+  for (std::size_t v = lab.size(); v < m.input_vertex.size(); ++v) lab.push_back(lab[m.input_vertex[v]]);
+  return lab;
+}
+
+PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
+                     bool uses_color) {
+  PreparedMesh p;
+  p.mesh = build_halfedge_mesh(input, name);
+  if (uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
+  p.bbox_max_side = longest_side(p.mesh, name);
+  p.input_vertices = input.positions.size();
+  return p;
+}
+
+// Values of the second mesh interpolated at each matched point.
+std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
+                                    const HalfedgeMesh& second, const std::vector<double>& values) {
+  std::vector<double> out(matches.size());
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    out[i] = interpolate(matches[i], second.triangles[matches[i].face], values);
+  }
+  return out;
+}
+
+std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
+                                    const HalfedgeMesh& second, const std::vector<Lab>& colors) {
+  std::vector<double> channel(colors.size());
+  std::vector<Lab> out(matches.size());
+  for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
+    for (std::size_t i = 0; i < colors.size(); ++i) channel[i] = colors[i].*c;
+    const auto values = interpolate_all(matches, second, channel);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i].*c = values[i];
+  }
+  return out;
+}
+
+// Processed curvature of a mesh at one radius, remembered for the other direction when both
+// directions use the same radii (same bounding-box size, e.g. colour-only distortions).
+class CurvatureCache {
+ public:
+  CurvatureCache(CurvatureVariant variant, bool reuse) : variant_(variant), reuse_(reuse) {}
+
+  const std::vector<double>& get(const HalfedgeMesh& mesh, double radius, double maxdim) {
+    for (const Entry& e : entries_) {
+      if (e.mesh == &mesh && e.radius == radius && e.maxdim == maxdim) return e.values;
+    }
+    // Without reuse only the current scale's pair is kept (popping the front of a deque leaves
+    // references to the other entries valid).
+    if (!reuse_ && entries_.size() >= 2) entries_.pop_front();
+    entries_.push_back({&mesh, radius, maxdim, processed_curvature(mesh, radius, maxdim, variant_)});
+    return entries_.back().values;
+  }
+
+ private:
+  struct Entry {
+    const HalfedgeMesh* mesh;
+    double radius, maxdim;
+    std::vector<double> values;
+  };
+  CurvatureVariant variant_;
+  bool reuse_;
+  std::deque<Entry> entries_;
+};
+
+// Adds each vertex's features at one scale to the running sums.
+void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
+                      const FeatureConventions& conventions, std::vector<FeatureVector>& sums) {
+  const auto n = static_cast<std::int64_t>(sums.size());
+#pragma omp parallel
+  {
+    WalkScratch scratch;
+    NeighbourhoodSamples samples;
+#pragma omp for schedule(dynamic, 512)
+    for (std::int64_t v = 0; v < n; ++v) {
+      sample_neighbourhood(fields, static_cast<std::uint32_t>(v), walk, scratch, samples);
+      const FeatureVector f = fields.color ? local_features(samples, conventions)
+                                           : curvature_features(samples, conventions);
+      for (std::size_t k = 0; k < kNumFeatures; ++k) sums[v][k] += f[k];
+    }
+  }
+}
+
+// One direction: the features of `first`'s vertices matched on `second`, summed over scales.
+std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const PreparedMesh& second,
+                                          const MultiscaleDefinition& def, int scales,
+                                          CurvatureCache& curvatures) {
+  auto [matched_point, matches] = match_to_surface(first.mesh.positions, second.mesh, def.anchor);
+  std::vector<Lab> lab_match;
+  if (def.uses_color) lab_match = interpolate_colors(matches, second.mesh, second.lab);
+  const double maxdim = first.bbox_max_side;
+  std::vector<FeatureVector> sums(first.mesh.positions.size(), FeatureVector{});
+  double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
+  for (int level = 0; level < scales; ++level) {
+    const auto& curv1 = curvatures.get(first.mesh, maxdim * rc, maxdim);
+    const auto curv_match =
+        interpolate_all(matches, second.mesh, curvatures.get(second.mesh, maxdim * rc, maxdim));
+    const MatchedFields fields{&first.mesh, &matched_point, &curv1, &curv_match,
+                               def.uses_color ? &first.lab : nullptr,
+                               def.uses_color ? &lab_match : nullptr};
+    const double h = rc * def.neighbourhood_factor * maxdim;
+    accumulate_scale(fields, {h, h / def.sigma_divisor, def.strict_outward_test}, def.conventions,
+                     sums);
+    rc += def.radius_step;
+  }
+  return sums;
+}
+
+DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& second,
+                              const MultiscaleDefinition& def, int scales,
+                              CurvatureCache& curvatures, const DirectionPooling& pool) {
+  DirectionResult result;
+  result.bbox_max_side = first.bbox_max_side;
+  auto sums = direction_sums(first, second, def, scales, curvatures);
+  // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
+  pool(sums, scales, result);
+  if (result.local_distortion.size() > first.input_vertices) {
+    result.local_distortion.resize(first.input_vertices);
+  }
+  return result;
+}
+
+}  // namespace
+
+MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
+                                const MultiscaleDefinition& def, const MultiscaleRun& run,
+                                const DirectionPooling& pool) {
+  if (run.scales < 1 || run.scales > 100) {
+    throw std::invalid_argument(std::string(def.name) +
+                                ": the number of scales must be between 1 and 100");
+  }
+  // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
+  auto ref_task = std::async(std::launch::async, [&] {
+    return prepare(reference, "reference mesh", run, def.uses_color);
+  });
+  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def.uses_color);
+  const PreparedMesh ref = ref_task.get();
+  MeshMetricResult result;
+  for (const auto* m : {&ref.mesh, &dist.mesh}) {
+    result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
+  }
+  const bool both = run.direction == Direction::kSymmetric;
+  CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side);
+  if (run.direction != Direction::kRefToDist) {
+    result.dist_to_ref = run_direction(dist, ref, def, run.scales, curvatures, pool);
+  }
+  if (run.direction != Direction::kDistToRef) {
+    result.ref_to_dist = run_direction(ref, dist, def, run.scales, curvatures, pool);
+  }
+  result.score = both ? (result.dist_to_ref->score + result.ref_to_dist->score) / 2
+                      : (result.dist_to_ref ? result.dist_to_ref->score : result.ref_to_dist->score);
+  return result;
+}
+
+}  // namespace qm3d::mesh::detail

@@ -1,0 +1,49 @@
+// The multi-scale engine shared by CMDM and MSDM2 (SPEC-CMDM 1.4-1.9 and 2): match each vertex of
+// one mesh on the other, estimate curvature at each scale, walk each vertex's neighbourhood and
+// accumulate its local features over the scales. The metrics differ only by the parameters in
+// MultiscaleDefinition and by how they pool the per-vertex results. Internal.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "curvature.h"
+#include "projection.h"
+#include "qm3d/common/color.h"
+#include "qm3d/common/features.h"
+#include "qm3d/mesh/mesh_metric.h"
+
+namespace qm3d::mesh::detail {
+
+/// What distinguishes one multi-scale mesh metric from another.
+struct MultiscaleDefinition {
+  const char* name;                    ///< "CMDM", "MSDM2" (for messages)
+  CurvatureVariant curvature;
+  double first_radius;                 ///< rc at the first scale (fraction of BB)
+  double radius_step;                  ///< rc increment per scale
+  double neighbourhood_factor;         ///< neighbourhood radius h = factor * rc * BB
+  double sigma_divisor;                ///< Gaussian sigma = h / divisor
+  HeronAnchor anchor;                  ///< where the interpolation distances are measured from
+  bool strict_outward_test;            ///< walk test "> 0" (MSDM2) or ">= 0" (CMDM)
+  bool uses_color;                     ///< sample LAB2000HL colours (CMDM)
+  FeatureConventions conventions;
+};
+
+/// Pools one direction's per-vertex feature sums (over `scales` scales) into `result`.
+using DirectionPooling = std::function<void(const std::vector<FeatureVector>& sums, int scales,
+                                            DirectionResult& result)>;
+
+struct MultiscaleRun {
+  Direction direction = Direction::kSymmetric;
+  int scales = 3;
+  const Lab2000hlTable* colors = nullptr;  ///< required when the definition uses colour
+};
+
+/// Runs a metric on a pair of meshes: prepares both, computes the requested directions, and
+/// averages them for the symmetric score.
+MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
+                                const MultiscaleDefinition& definition, const MultiscaleRun& run,
+                                const DirectionPooling& pool);
+
+}  // namespace qm3d::mesh::detail

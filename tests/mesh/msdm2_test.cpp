@@ -1,0 +1,77 @@
+#include "qm3d/mesh/msdm2.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "qm3d/mesh/mesh_io.h"
+#include "test_paths.h"
+
+namespace qm3d::mesh {
+namespace {
+
+std::filesystem::path cmdm_dir() { return test::reference_dir() / "cmdm"; }
+
+TEST(Msdm2, MatchesEveryReferenceRow) {
+  std::ifstream in(test::reference_dir() / "msdm2" / "msdm2_reference.tsv");
+  std::string line;
+  std::getline(in, line);  // header
+  int rows = 0;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string ref, dist;
+    double expected = 0;
+    s >> ref >> dist >> expected;
+    SCOPED_TRACE(ref + " vs " + dist);
+    const auto r = read_mesh(cmdm_dir() / ref).mesh;
+    const auto d = read_mesh(cmdm_dir() / dist).mesh;
+    const MeshMetricResult m = compute_msdm2(r, d);
+    // The reference printed 6 significant digits. On blob4_geonoise / bothnoise ~13% of the
+    // distorted vertices project onto an edge of the reference (equidistant from two faces);
+    // MSDM2 measures its Heron distances from the off-surface vertex, so the value there depends
+    // on which of the tied faces CGAL's AABB tree reports (deterministic here, but not MEPP2's
+    // choice): choosing the lowest / highest face index moves the score from 0.494361 to
+    // 0.494455 against the reference's 0.494504. Those rows are checked to 2e-4; see issue 7.
+    const bool tie_sensitive = dist.find("noise") != std::string::npos;
+    EXPECT_NEAR(m.score, expected, (tie_sensitive ? 2e-4 : 1e-5) * expected);
+    ASSERT_TRUE(m.dist_to_ref);
+    EXPECT_FALSE(m.ref_to_dist);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 4);
+}
+
+TEST(Msdm2, IdenticalMeshesGiveZero) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  Msdm2Options o;
+  o.direction = Direction::kSymmetric;
+  const MeshMetricResult m = compute_msdm2(r, r, o);
+  EXPECT_LT(m.score, 1e-12);
+  EXPECT_TRUE(m.dist_to_ref && m.ref_to_dist);
+}
+
+TEST(Msdm2, IgnoresColourAndWorksWithoutIt) {
+  auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  auto d = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
+  const double with_color = compute_msdm2(r, d).score;
+  r.colors.clear();
+  d.colors.clear();
+  EXPECT_EQ(compute_msdm2(r, d).score, with_color);
+  EXPECT_EQ(compute_msdm2(r, read_mesh(cmdm_dir() / "blob4_colnoise.off").mesh).score,
+            compute_msdm2(r, r).score);
+}
+
+TEST(Msdm2, LocalDistortionPoolsToTheScore) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
+  const MeshMetricResult m = compute_msdm2(r, d);
+  double sum = 0;
+  for (double ld : m.dist_to_ref->local_distortion) sum += ld * ld * ld;
+  EXPECT_NEAR(std::cbrt(sum / m.dist_to_ref->local_distortion.size()), m.score, 1e-12);
+  EXPECT_EQ(m.dist_to_ref->local_distortion.size(), d.num_vertices());
+}
+
+}  // namespace
+}  // namespace qm3d::mesh
