@@ -29,6 +29,18 @@ MetricReport new_report(const char* metric, const std::filesystem::path& referen
   return r;
 }
 
+// Metric errors name "reference" and "distorted": say which files those are.
+template <typename F>
+auto naming_inputs(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                   const F& compute) {
+  try {
+    return compute();
+  } catch (const NumericError& e) {
+    throw NumericError(e.what() + std::string(" (reference ") + reference.string() +
+                       ", distorted " + distorted.string() + ")");
+  }
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -110,7 +122,8 @@ MetricReport run_mesh_metric(const char* metric, const std::filesystem::path& re
   const auto start = std::chrono::steady_clock::now();
   const mesh::MeshFile ref = mesh::read_mesh(reference, {require_colors});
   const mesh::MeshFile dist = mesh::read_mesh(distorted, {require_colors});
-  const mesh::MeshMetricResult r = compute(ref.mesh, dist.mesh, !map.empty());
+  const mesh::MeshMetricResult r = naming_inputs(
+      reference, distorted, [&] { return compute(ref.mesh, dist.mesh, !map.empty()); });
   MetricReport report = new_report(metric, reference, distorted, std::move(options), r.score);
   add_mesh_directions(r, report);
   for (const auto& warnings : {ref.warnings, dist.warnings, r.warnings}) {
@@ -153,7 +166,8 @@ MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesys
   const ColoredCloud dist = load_cloud(distorted);
   pointcloud::PcqmOptions o = options;
   o.per_point = !map.empty();
-  const pointcloud::PcqmResult r = pointcloud::compute_pcqm(ref, dist, o);
+  const pointcloud::PcqmResult r =
+      naming_inputs(reference, distorted, [&] { return pointcloud::compute_pcqm(ref, dist, o); });
   MetricReport report = new_report("pcqm", reference, distorted, pcqm_options_json(options), r.score);
   report.ref_to_dist =
       to_report(r.ref_to_dist.score, r.ref_to_dist.features, r.ref_to_dist.bbox_max_side);

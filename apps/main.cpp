@@ -10,9 +10,11 @@
 #include "batch.h"
 #include "commands.h"
 #include "demo.h"
+#include "eval_commands.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/model_io.h"
 #include "qm3d/common/version.h"
 #include "report.h"
 
@@ -24,6 +26,10 @@ constexpr int kExitOk = 0;
 constexpr int kExitUsage = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInternal = 3;
+
+constexpr const char* kModelHelp =
+    "Model file (JSON: metric, features, weights; e.g. written by qm3d train) used instead of the "
+    "built-in weights";
 
 struct OutputOptions {
   bool json = false;
@@ -164,6 +170,10 @@ int run(int argc, char** argv) {
   cmdm_cmd->add_option("REF", ref, "Reference mesh")->required();
   cmdm_cmd->add_option("DIST", dist, "Distorted mesh")->required();
   add_cmdm_options(cmdm_cmd, cmdm, direction, weights);
+  std::string model_file;
+  cmdm_cmd->add_option("--model", model_file, kModelHelp)
+      ->type_name("MODEL.json")
+      ->excludes("--weights");
   add_output_options(cmdm_cmd, out, true);
 
   mesh::Msdm2Options msdm2;
@@ -189,6 +199,7 @@ int run(int argc, char** argv) {
   pcqm_cmd->add_option("REF", ref, "Reference cloud (PCQM's first argument)")->required();
   pcqm_cmd->add_option("DIST", dist, "Distorted cloud")->required();
   add_pcqm_options(pcqm_cmd, pcqm, bbox);
+  pcqm_cmd->add_option("--model", model_file, kModelHelp)->type_name("MODEL.json");
   add_output_options(pcqm_cmd, out, true);
 
   auto* compare_cmd = app.add_subcommand(
@@ -222,6 +233,9 @@ int run(int argc, char** argv) {
   std::string demo_dir = default_demo_dir().string();
   demo_cmd->add_option("--dir", demo_dir, "Folder of the bundled stimuli")->capture_default_str();
 
+  const auto eval_commands =
+      add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -230,9 +244,12 @@ int run(int argc, char** argv) {
   }
 
   if (global.threads > 0) omp_set_num_threads(global.threads);
+  if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   cmdm.direction = parse_direction(direction);
   if (!weights.empty()) std::copy(weights.begin(), weights.end(), cmdm.model.weights.begin());
   cmdm.model.provenance = weights.empty() ? cmdm.model.provenance : "--weights";
+  if (!model_file.empty() && *cmdm_cmd) cmdm.model = read_model_for(model_file, "cmdm");
+  if (!model_file.empty() && *pcqm_cmd) pcqm.model = read_model_for(model_file, "pcqm");
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
   msdm2.direction = parse_direction(msdm2_direction);

@@ -20,6 +20,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   python3 python3-numpy
+  gnuplot-nox
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }

@@ -74,8 +74,7 @@ std::vector<double> read_table_file(const std::filesystem::path& path, std::size
   if (in.bad()) throw InputError("LAB2000HL table " + path.string() + ": read error");
   if (values.size() != expected) {
     throw FormatError("LAB2000HL table " + path.string() + ": expected " +
-                      std::to_string(expected) + " values, found " +
-                      std::to_string(values.size()));
+                      std::to_string(expected) + " values, found " + std::to_string(values.size()));
   }
   return values;
 }
@@ -104,7 +103,8 @@ Lab srgb_to_cielab(const Rgb& rgb) {
   const double y = kSrgbToXyz[1][0] * r + kSrgbToXyz[1][1] * g + kSrgbToXyz[1][2] * b;
   const double z = kSrgbToXyz[2][0] * r + kSrgbToXyz[2][1] * g + kSrgbToXyz[2][2] * b;
   const double fy = lab_f(y / kWhiteY);
-  return Lab{116.0 * fy - 16.0, 500.0 * (lab_f(x / kWhiteX) - fy), 200.0 * (fy - lab_f(z / kWhiteZ))};
+  return Lab{116.0 * fy - 16.0, 500.0 * (lab_f(x / kWhiteX) - fy),
+             200.0 * (fy - lab_f(z / kWhiteZ))};
 }
 
 double chroma(const Lab& c) { return std::sqrt(c.a * c.a + c.b * c.b); }
@@ -173,7 +173,8 @@ double Lab2000hlTable::lightness(double l_star) const {
   if (pos >= n) return lightness_.back();  // above 100: the last value, as the references do
   const double x0 = grid(pos - 1);
   const double x1 = grid(pos);
-  return lightness_[pos - 1] + ((l_star - x0) / (x1 - x0)) * (lightness_[pos] - lightness_[pos - 1]);
+  return lightness_[pos - 1] +
+         ((l_star - x0) / (x1 - x0)) * (lightness_[pos] - lightness_[pos - 1]);
 }
 
 double Lab2000hlTable::ab_value(const std::vector<double>& grid, double a, double b) const {
@@ -185,7 +186,8 @@ double Lab2000hlTable::ab_value(const std::vector<double>& grid, double a, doubl
   const int x1 = x0 + 1;
   const int y1 = y0 + 1;
   auto at = [&](int x, int y) {
-    return grid[static_cast<std::size_t>(x - kAbMin) * kAbSide + static_cast<std::size_t>(y - kAbMin)];
+    return grid[static_cast<std::size_t>(x - kAbMin) * kAbSide +
+                static_cast<std::size_t>(y - kAbMin)];
   };
   const double x1x = x1 - a, y1y = y1 - b, xx0 = a - x0, yy0 = b - y0;
   const double x1x0 = x1 - x0, y1y0 = y1 - y0;

@@ -60,9 +60,8 @@ FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureCon
 FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
   const PairedMoments light =
       weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance);
-  const PairedMoments structure = conv.unweighted_lightness_structure
-                                      ? unweighted_moments(s.light1, s.light2)
-                                      : light;
+  const PairedMoments structure =
+      conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
   FeatureVector f{};
   f[3] = 1.0 - lightness_similarity(light.mean1, light.mean2);
   f[4] = 1.0 - lightness_contrast_similarity(light.sd1, light.sd2);

@@ -38,7 +38,9 @@ std::size_t scalar_size(ScalarType t) {
   return 8;
 }
 
-bool is_integer_type(ScalarType t) { return t != ScalarType::kFloat32 && t != ScalarType::kFloat64; }
+bool is_integer_type(ScalarType t) {
+  return t != ScalarType::kFloat32 && t != ScalarType::kFloat64;
+}
 
 std::optional<ScalarType> parse_type(const std::string& s) {
   if (s == "char" || s == "int8") return ScalarType::kInt8;
@@ -54,14 +56,22 @@ std::optional<ScalarType> parse_type(const std::string& s) {
 
 const char* type_name(ScalarType t) {
   switch (t) {
-    case ScalarType::kInt8: return "char";
-    case ScalarType::kUint8: return "uchar";
-    case ScalarType::kInt16: return "short";
-    case ScalarType::kUint16: return "ushort";
-    case ScalarType::kInt32: return "int";
-    case ScalarType::kUint32: return "uint";
-    case ScalarType::kFloat32: return "float";
-    case ScalarType::kFloat64: return "double";
+    case ScalarType::kInt8:
+      return "char";
+    case ScalarType::kUint8:
+      return "uchar";
+    case ScalarType::kInt16:
+      return "short";
+    case ScalarType::kUint16:
+      return "ushort";
+    case ScalarType::kInt32:
+      return "int";
+    case ScalarType::kUint32:
+      return "uint";
+    case ScalarType::kFloat32:
+      return "float";
+    case ScalarType::kFloat64:
+      return "double";
   }
   return "?";
 }
@@ -124,6 +134,15 @@ class Cursor {
     return format_ == Format::kAscii ? ascii_value(t) : binary_value(t);
   }
 
+  /// True when nothing but whitespace follows the current position.
+  bool at_end() const {
+    for (std::size_t i = pos_; i < size_; ++i) {
+      const char c = data_[i];
+      if (c != ' ' && c != '\t' && c != '\r' && c != '\n') return false;
+    }
+    return true;
+  }
+
  private:
   void skip_spaces() {
     while (pos_ < line_end_ && (data_[pos_] == ' ' || data_[pos_] == '\t' || data_[pos_] == '\r')) {
@@ -164,14 +183,22 @@ class Cursor {
   double binary_value(ScalarType t) {
     if (size_ - pos_ < scalar_size(t)) fail(name_, "file is truncated in " + *where_);
     switch (t) {
-      case ScalarType::kInt8: return load<std::int8_t>();
-      case ScalarType::kUint8: return load<std::uint8_t>();
-      case ScalarType::kInt16: return load<std::int16_t>();
-      case ScalarType::kUint16: return load<std::uint16_t>();
-      case ScalarType::kInt32: return load<std::int32_t>();
-      case ScalarType::kUint32: return load<std::uint32_t>();
-      case ScalarType::kFloat32: return load<float>();
-      case ScalarType::kFloat64: return load<double>();
+      case ScalarType::kInt8:
+        return load<std::int8_t>();
+      case ScalarType::kUint8:
+        return load<std::uint8_t>();
+      case ScalarType::kInt16:
+        return load<std::int16_t>();
+      case ScalarType::kUint16:
+        return load<std::uint16_t>();
+      case ScalarType::kInt32:
+        return load<std::int32_t>();
+      case ScalarType::kUint32:
+        return load<std::uint32_t>();
+      case ScalarType::kFloat32:
+        return load<float>();
+      case ScalarType::kFloat64:
+        return load<double>();
     }
     return 0;
   }
@@ -204,8 +231,8 @@ VertexLayout vertex_layout(const Element& e, const std::string& name) {
   l.y = find_property(e, "y");
   l.z = find_property(e, "z");
   if (l.x < 0 || l.y < 0 || l.z < 0) fail(name, "vertex element has no x, y, z properties");
-  const char* names[3][3] = {{"red", "green", "blue"}, {"r", "g", "b"},
-                             {"diffuse_red", "diffuse_green", "diffuse_blue"}};
+  const char* names[3][3] = {
+      {"red", "green", "blue"}, {"r", "g", "b"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}};
   for (const auto& n : names) {
     const int r = find_property(e, n[0]), g = find_property(e, n[1]), b = find_property(e, n[2]);
     if (r >= 0 && g >= 0 && b >= 0) {
@@ -225,10 +252,13 @@ ColorEncoding color_encoding(const Element& e, const VertexLayout& l, const std:
     fail(name, "colour channels have different types");
   }
   switch (t) {
-    case ScalarType::kUint8: return ColorEncoding::kUint8;
-    case ScalarType::kUint16: return ColorEncoding::kUint16;
+    case ScalarType::kUint8:
+      return ColorEncoding::kUint8;
+    case ScalarType::kUint16:
+      return ColorEncoding::kUint16;
     case ScalarType::kFloat32:
-    case ScalarType::kFloat64: return ColorEncoding::kFloat;
+    case ScalarType::kFloat64:
+      return ColorEncoding::kFloat;
     default:
       fail(name, std::string("unsupported colour type '") + type_name(t) +
                      "' (expected uchar, ushort or float)");
@@ -359,7 +389,8 @@ void skip_element(Cursor& cur, const Element& e, const std::string& name) {
 }  // namespace
 
 Header parse_header(const std::string& bytes, const std::string& name) {
-  if (bytes.size() < 4 || bytes.compare(0, 3, "ply") != 0 || (bytes[3] != '\n' && bytes[3] != '\r')) {
+  if (bytes.size() < 4 || bytes.compare(0, 3, "ply") != 0 ||
+      (bytes[3] != '\n' && bytes[3] != '\r')) {
     fail(name, "not a PLY file (missing 'ply' magic)");
   }
   const std::size_t end = bytes.find("end_header", 0);
@@ -376,10 +407,14 @@ Header parse_header(const std::string& bytes, const std::string& name) {
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "format") {
       if (w.size() < 2) fail(name, "bad format line");
-      if (w[1] == "ascii") h.format = Format::kAscii;
-      else if (w[1] == "binary_little_endian") h.format = Format::kBinaryLittleEndian;
-      else if (w[1] == "binary_big_endian") h.format = Format::kBinaryBigEndian;
-      else fail(name, "unknown format '" + w[1] + "'");
+      if (w[1] == "ascii")
+        h.format = Format::kAscii;
+      else if (w[1] == "binary_little_endian")
+        h.format = Format::kBinaryLittleEndian;
+      else if (w[1] == "binary_big_endian")
+        h.format = Format::kBinaryBigEndian;
+      else
+        fail(name, "unknown format '" + w[1] + "'");
       have_format = true;
     } else if (w[0] == "element") {
       if (w.size() != 3) fail(name, "bad element line '" + line + "'");
@@ -436,6 +471,9 @@ Content parse(const std::string& bytes, const std::string& name) {
     }
   }
   if (!have_vertices) fail(name, "no vertex element");
+  if (!cur.at_end()) {
+    fail(name, "data continues after the elements the header declares (wrong element count?)");
+  }
   normalise_colors(out, name);
   return out;
 }
@@ -490,8 +528,10 @@ void write(const std::filesystem::path& path, const WriteData& d) {
         continue;
       }
       for (double c : p) {
-        if (d.double_positions) put<double>(out, c);
-        else put<float>(out, static_cast<float>(c));
+        if (d.double_positions)
+          put<double>(out, c);
+        else
+          put<float>(out, static_cast<float>(c));
       }
       if (!d.colors.empty()) out.write(reinterpret_cast<const char*>(d.colors[i].data()), 3);
       if (!d.scalar_name.empty()) put<float>(out, d.scalars[i]);

@@ -38,7 +38,8 @@ double LinearModel::apply(const FeatureVector& features) const {
 
 const LinearModel& cmdm_model() {
   static const LinearModel model{
-      "cmdm", {0, 0.091, 0, 0, 0.22, 0.032, 0.656, 0},
+      "cmdm",
+      {0, 0.091, 0, 0, 0.22, 0.032, 0.656, 0},
       "Nehme et al., CMDM, eq. 1.13 (logistic regression on the vertex-colour dataset); "
       "MEPP2 cmdm.h w2, w5, w6, w7"};
   return model;
@@ -46,7 +47,8 @@ const LinearModel& cmdm_model() {
 
 const LinearModel& pcqm_model() {
   static const LinearModel model{
-      "pcqm", {0, 0, 0.0057, 0.9771, 0, 0.0172, 0, 0},
+      "pcqm",
+      {0, 0, 0.0057, 0.9771, 0, 0.0172, 0, 0},
       "Meynet et al., PCQM, QoMEX 2020; MEPP-team/PCQM main.cpp `PCQM Formula`"};
   return model;
 }

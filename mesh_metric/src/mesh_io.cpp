@@ -197,6 +197,10 @@ RawMesh parse_off(const std::string& text, const std::string& file) {
     if (!lines.next(line)) fail(file, "file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
     read_off_face(line, lines.line_number(), file, m);
   }
+  if (lines.next(line)) {
+    fail(file, "line " + std::to_string(lines.line_number()) +
+                   ": more data than the header's vertex and face counts declare");
+  }
   return m;
 }
 
@@ -216,15 +220,21 @@ RawMesh from_ply(const std::string& bytes, const std::string& file) {
 
 // ---- validation and clean-up -----------------------------------------------------------------
 
-RawMesh parse_any(const std::filesystem::path& path) {
+MeshFormat format_of(const std::filesystem::path& path) {
   const std::string ext = lower_extension(path);
-  if (ext != "obj" && ext != "off" && ext != "ply") {
-    fail(path.string(), "unknown mesh format '." + ext + "' (expected .obj, .off or .ply)");
+  if (ext == "obj") return MeshFormat::kObj;
+  if (ext == "off") return MeshFormat::kOff;
+  if (ext == "ply") return MeshFormat::kPly;
+  fail(path.string(), "unknown mesh format '." + ext + "' (expected .obj, .off or .ply)");
+}
+
+RawMesh parse_raw(const std::string& bytes, MeshFormat format, const std::string& name) {
+  switch (format) {
+    case MeshFormat::kObj: return parse_obj(bytes, name);
+    case MeshFormat::kOff: return parse_off(bytes, name);
+    case MeshFormat::kPly: return from_ply(bytes, name);
   }
-  const std::string bytes = read_file_bytes(path);
-  if (ext == "obj") return parse_obj(bytes, path.string());
-  if (ext == "off") return parse_off(bytes, path.string());
-  return from_ply(bytes, path.string());
+  fail(name, "unknown mesh format");
 }
 
 // Rounds to float precision, as MEPP2 stores colours. The volatile store is deliberate: GCC 12's
@@ -329,9 +339,9 @@ void drop_unreferenced(MeshFile& out, const std::string& file) {
 
 }  // namespace
 
-MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options) {
-  const std::string file = path.string();
-  RawMesh raw = parse_any(path);
+MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::string& file,
+                    const MeshReadOptions& options) {
+  RawMesh raw = parse_raw(bytes, format, file);
   if (raw.positions.empty()) fail(file, "no vertices");
   MeshFile out;
   const bool has_colors = std::any_of(raw.colors.begin(), raw.colors.end(),
@@ -346,8 +356,14 @@ MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& opt
   return out;
 }
 
+MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options) {
+  const MeshFormat format = format_of(path);
+  return parse_mesh(read_file_bytes(path), format, path.string(), options);
+}
+
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
-  RawMesh raw = parse_any(path);
+  const MeshFormat format = format_of(path);
+  RawMesh raw = parse_raw(read_file_bytes(path), format, path.string());
   if (raw.positions.empty()) fail(path.string(), "no vertices");
   ColoredCloud cloud;
   cloud.colors = vertex_colors(raw, path.string());

@@ -46,7 +46,7 @@ class Lab2000hlTable {
  public:
   static constexpr std::size_t kLightnessSize = 100001;  ///< L* grid 0, 0.001, ..., 100
   static constexpr double kLightnessStep = 0.001;
-  static constexpr int kAbMin = -128;                    ///< a*, b* grid -128 ... 128
+  static constexpr int kAbMin = -128;  ///< a*, b* grid -128 ... 128
   static constexpr std::size_t kAbSide = 257;
 
   /// Reads the five table files from `dir`.

@@ -1,7 +1,7 @@
 // The eight local features shared by CMDM (Nehme et al., "Color-Mesh Distortion Measure",
 // 2020/2021, eqs. 1.5-1.8) and PCQM (Meynet et al., QoMEX 2020): three curvature features and
-// five colour features (iCID form: lightness, lightness contrast, lightness structure, chroma, hue).
-// Every feature is a distortion: 0 for identical neighbourhoods.
+// five colour features (iCID form: lightness, lightness contrast, lightness structure, chroma,
+// hue). Every feature is a distortion: 0 for identical neighbourhoods.
 #pragma once
 
 #include <array>
@@ -60,7 +60,7 @@ struct NeighbourhoodSamples {
 /// How each reference computes its statistics (SPEC-CMDM 1.8 and 2, SPEC-PCQM 1.5).
 struct FeatureConventions {
   CovarianceConvention curvature_covariance;
-  bool cap_curvature_structure = false;  ///< f3 <- min(f3, 1)               (PCQM)
+  bool cap_curvature_structure = false;         ///< f3 <- min(f3, 1)               (PCQM)
   bool unweighted_lightness_structure = false;  ///< sL1, sL2, sL12 unweighted (PCQM)
   CovarianceConvention lightness_covariance;    ///< when weighted
 };

@@ -37,6 +37,14 @@ struct MeshReadOptions {
 /// some vertices, colour values outside [0, 255], no faces.
 MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options = {});
 
+/// The text and binary formats read_mesh understands.
+enum class MeshFormat { kObj, kOff, kPly };
+
+/// Parses a mesh already in memory (what read_mesh does after reading the file); `name` names
+/// it in messages.
+MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::string& name,
+                    const MeshReadOptions& options = {});
+
 /// Reads only the vertices (positions and colours) of any mesh format; faces may be absent.
 /// Used to read a mesh as a point cloud.
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path);

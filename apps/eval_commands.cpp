@@ -1,0 +1,376 @@
+#include "eval_commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "eval_plot.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/evaluation.h"
+#include "qm3d/common/file_io.h"
+#include "qm3d/common/version.h"
+#include "report.h"
+#include "score_table.h"
+#include "train_command.h"
+
+namespace qm3d::app {
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+/// Coverage of the bootstrap intervals (the "95%" of the issue and of P.1401).
+constexpr double kConfidence = 0.95;
+
+// ---- reading and joining -------------------------------------------------------------------
+
+struct EvalData {
+  CsvTable scores_table, mos_table;
+  std::size_t scores_key = 0, scores_value = 0, mos_key = 0, mos_value = 0;
+  std::optional<std::size_t> ci;
+  JoinedRows join;
+  KeyList missing;  ///< joined rows with an empty score, MOS or CI (e.g. failed batch pairs)
+  std::vector<std::string> keys;
+  std::vector<double> scores, mos, ci95;
+};
+
+bool looks_like_paths(const KeyList& keys) {
+  for (const std::string& k : keys.first) {
+    if (k.find('/') != std::string::npos || k.find('.') != std::string::npos) return true;
+  }
+  return false;
+}
+
+void check_something_joined(const EvalData& d, bool stem) {
+  if (!d.join.keys.empty()) return;
+  const bool hint =
+      !stem && (looks_like_paths(d.join.left_only) || looks_like_paths(d.join.right_only));
+  throw FormatError("no stimulus in common between " + d.scores_table.path + " (key \"" +
+                    d.scores_table.header[d.scores_key] + "\") and " + d.mos_table.path +
+                    " (key \"" + d.mos_table.header[d.mos_key] + "\")" +
+                    (hint ? "; the keys look like file paths: try --stem" : ""));
+}
+
+void collect_values(EvalData& d) {
+  for (std::size_t i = 0; i < d.join.keys.size(); ++i) {
+    const auto score = cell_number(d.scores_table, d.join.left[i], d.scores_value);
+    const auto mos = cell_number(d.mos_table, d.join.right[i], d.mos_value);
+    const auto ci =
+        d.ci ? cell_number(d.mos_table, d.join.right[i], *d.ci) : std::optional<double>(0);
+    if (!score || !mos || !ci) {
+      d.missing.add(d.join.keys[i]);
+      continue;
+    }
+    if (*ci < 0) {
+      throw FormatError(d.mos_table.path + ":" +
+                        std::to_string(d.mos_table.line_numbers[d.join.right[i]]) + ": column \"" +
+                        d.mos_table.header[*d.ci] + "\": a confidence interval cannot be negative");
+    }
+    d.keys.push_back(d.join.keys[i]);
+    d.scores.push_back(*score);
+    d.mos.push_back(*mos);
+    if (d.ci) d.ci95.push_back(*ci);
+  }
+}
+
+EvalData load_eval_data(const EvalCommandOptions& o) {
+  EvalData d;
+  d.scores_table = read_csv_table(o.scores);
+  d.mos_table = read_csv_table(o.mos);
+  d.scores_key = key_column(d.scores_table, o.scores_key, "--scores-key");
+  d.scores_value =
+      value_column(d.scores_table, o.scores_column, {"score"}, d.scores_key, "--scores-column");
+  d.mos_key = o.mos_key.empty() ? 0 : require_column(d.mos_table, o.mos_key, "--mos-key");
+  d.mos_value = value_column(d.mos_table, o.mos_column, {"mos"}, d.mos_key, "--mos-column");
+  if (!o.ci_column.empty()) d.ci = require_column(d.mos_table, o.ci_column, "--ci-column");
+  d.join = join_on_key(d.scores_table, d.scores_key, d.mos_table, d.mos_key, o.stem);
+  check_something_joined(d, o.stem);
+  collect_values(d);
+  return d;
+}
+
+void warn_partial_join(const EvalData& d, bool quiet) {
+  if (quiet) return;
+  if (d.join.left_only.count) {
+    std::cerr << "qm3d: warning: " << d.scores_table.path << ": " << d.join.left_only.count
+              << " rows have no partner in " << d.mos_table.path << ": "
+              << d.join.left_only.examples() << "\n";
+  }
+  if (d.join.right_only.count) {
+    std::cerr << "qm3d: warning: " << d.mos_table.path << ": " << d.join.right_only.count
+              << " rows have no partner in " << d.scores_table.path << ": "
+              << d.join.right_only.examples() << "\n";
+  }
+  if (d.missing.count) {
+    std::cerr << "qm3d: warning: " << d.missing.count
+              << " stimuli left out (empty or NaN score, MOS or CI): " << d.missing.examples()
+              << "\n";
+  }
+}
+
+// ---- writing -------------------------------------------------------------------------------
+
+ordered_json number(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(); }
+
+ordered_json keys_json(const KeyList& k) { return {{"count", k.count}, {"first", k.first}}; }
+
+ordered_json statistic_json(const Statistic& s) {
+  ordered_json j = {{"value", number(s.value)}, {"ci95", nullptr}};
+  if (s.ci) j["ci95"] = {number(s.ci->low), number(s.ci->high)};
+  return j;
+}
+
+// The statistics in their output order, with their names.
+std::vector<std::pair<std::string, Statistic>> named_statistics(const EvaluationResult& r) {
+  std::vector<std::pair<std::string, Statistic>> s = {{"plcc", r.plcc},
+                                                      {"srocc", r.srocc},
+                                                      {"krocc", r.krocc},
+                                                      {"plcc_logistic", r.plcc_logistic},
+                                                      {"rmse_logistic", r.rmse_logistic}};
+  if (r.outlier_ratio) s.emplace_back("outlier_ratio", *r.outlier_ratio);
+  return s;
+}
+
+ordered_json logistic_json(const LogisticFit& fit) {
+  return {{"function", "beta2 + (beta1 - beta2) / (1 + exp(-(x - beta3) / |beta4|))"},
+          {"beta1", number(fit.function.beta1)},
+          {"beta2", number(fit.function.beta2)},
+          {"beta3", number(fit.function.beta3)},
+          {"beta4", number(fit.function.beta4)},
+          {"rmse", number(fit.rmse)},
+          {"converged", fit.converged},
+          {"bounded", fit.bounded}};
+}
+
+ordered_json table_json(const CsvTable& t, std::size_t key, std::size_t value, std::size_t rows) {
+  return {{"file", t.path}, {"key", t.header[key]}, {"column", t.header[value]}, {"rows", rows}};
+}
+
+ordered_json eval_json(const EvalData& d, const EvaluationResult& r, const EvalCommandOptions& o) {
+  ordered_json j = {{"command", "eval"}, {"version", kVersion}};
+  j["scores"] =
+      table_json(d.scores_table, d.scores_key, d.scores_value, d.scores_table.rows.size());
+  j["mos"] = table_json(d.mos_table, d.mos_key, d.mos_value, d.mos_table.rows.size());
+  j["mos"]["ci_column"] = d.ci ? ordered_json(d.mos_table.header[*d.ci]) : ordered_json();
+  j["key_match"] = o.stem ? "file stem" : "exact";
+  j["stimuli"] = r.count;
+  j["unmatched"] = {{"scores", keys_json(d.join.left_only)}, {"mos", keys_json(d.join.right_only)}};
+  j["missing_values"] = keys_json(d.missing);
+  for (const auto& [name, s] : named_statistics(r)) j["statistics"][name] = statistic_json(s);
+  j["logistic"] = logistic_json(r.fit);
+  j["bootstrap"] = {
+      {"replicates", r.bootstrap_replicates},
+      {"used", r.bootstrap_used},
+      {"seed", o.seed},
+      {"confidence", kConfidence},
+      {"method", "percentile; stimuli resampled with replacement; logistic refitted"}};
+  return j;
+}
+
+std::string fixed(double v, const char* spec = "%.4f") {
+  if (!std::isfinite(v)) return "nan";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v);
+  return buf;
+}
+
+std::string eval_csv(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "statistic,value,ci95_low,ci95_high\nstimuli," << r.count << ",,\n";
+  for (const auto& [name, s] : named_statistics(r)) {
+    out << name << ',' << format_double(s.value) << ','
+        << (s.ci ? format_double(s.ci->low) + ',' + format_double(s.ci->high) : std::string(","))
+        << "\n";
+  }
+  return out.str();
+}
+
+const char* display_name(const std::string& name) {
+  if (name == "plcc") return "PLCC";
+  if (name == "srocc") return "SROCC";
+  if (name == "krocc") return "KROCC";
+  if (name == "plcc_logistic") return "PLCC (logistic)";
+  if (name == "rmse_logistic") return "RMSE (logistic)";
+  return "outlier ratio";
+}
+
+// The column header of the text table, saying where the intervals come from.
+std::string interval_header(const EvaluationResult& r, const EvalCommandOptions& o) {
+  char line[160];
+  if (r.bootstrap_replicates == 0) {
+    std::snprintf(line, sizeof line, "%-17s %9s   95%% CI: none (--bootstrap 0)\n", "", "value");
+  } else {
+    std::snprintf(line, sizeof line,
+                  "%-17s %9s   95%% CI (bootstrap: %zu of %zu replicates, seed %llu)\n", "",
+                  "value", r.bootstrap_used, r.bootstrap_replicates,
+                  static_cast<unsigned long long>(o.seed));
+  }
+  return line;
+}
+
+std::string eval_text(const EvalData& d, const EvaluationResult& r, const EvalCommandOptions& o) {
+  std::ostringstream out;
+  out << r.count << " stimuli: " << d.scores_table.path << " (key "
+      << d.scores_table.header[d.scores_key] << ", score " << d.scores_table.header[d.scores_value]
+      << ") vs " << d.mos_table.path << " (key " << d.mos_table.header[d.mos_key] << ", MOS "
+      << d.mos_table.header[d.mos_value] << ")\n";
+  out << interval_header(r, o);
+  char line[160];
+  for (const auto& [name, s] : named_statistics(r)) {
+    const std::string ci = s.ci ? "[" + fixed(s.ci->low) + ", " + fixed(s.ci->high) + "]" : "-";
+    std::snprintf(line, sizeof line, "%-17s %9s   %s\n", display_name(name), fixed(s.value).c_str(),
+                  ci.c_str());
+    out << line;
+  }
+  const LogisticFunction& f = r.fit.function;
+  out << "logistic: MOS = " << fixed(f.beta2, "%.6g") << " + (" << fixed(f.beta1, "%.6g") << " - "
+      << fixed(f.beta2, "%.6g") << ") / (1 + exp(-(score - " << fixed(f.beta3, "%.6g") << ") / "
+      << fixed(std::fabs(f.beta4), "%.6g") << "))"
+      << (r.fit.converged ? ""
+          : r.fit.bounded ? "  [stopped at the bound: nearly linear or a step]"
+                          : "  [not converged]")
+      << "\n";
+  return out.str();
+}
+
+void emit_text(const std::string& text, const std::string& output) {
+  if (output.empty()) {
+    std::cout << text << std::flush;
+    if (!std::cout) throw InputError("stdout: write failed");
+    return;
+  }
+  write_file_atomically(output, [&](std::ostream& out) { out << text; });
+}
+
+void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& path) {
+  ScatterPlot p{d.scores, d.mos, r.fit.function, "", "", ""};
+  p.title = "PLCC " + fixed(r.plcc.value, "%.3f") + ", SROCC " + fixed(r.srocc.value, "%.3f") +
+            ", PLCC after logistic " + fixed(r.plcc_logistic.value, "%.3f") + " (" +
+            std::to_string(r.count) + " stimuli)";
+  p.x_label = d.scores_table.header[d.scores_value] + " (" +
+              std::filesystem::path(d.scores_table.path).filename().string() + ")";
+  p.y_label = d.mos_table.header[d.mos_value] + " (" +
+              std::filesystem::path(d.mos_table.path).filename().string() + ")";
+  write_scatter_plot(path, p);
+}
+
+int run_eval(const EvalCommandOptions& o, bool quiet) {
+  const EvalData d = load_eval_data(o);
+  warn_partial_join(d, quiet);
+  EvaluationOptions options;
+  options.bootstrap = o.bootstrap;
+  options.seed = o.seed;
+  options.confidence = kConfidence;
+  const EvaluationResult r = evaluate_scores(d.scores, d.mos, d.ci95, options);
+  if (!quiet && !r.fit.converged && !r.fit.bounded) {
+    std::cerr << "qm3d: warning: the logistic fit did not converge in its evaluation budget\n";
+  }
+  const std::string text = o.json  ? eval_json(d, r, o).dump(2) + "\n"
+                           : o.csv ? eval_csv(r)
+                                   : eval_text(d, r, o);
+  if (!o.plot.empty()) plot_eval(d, r, o.plot);
+  emit_text(text, o.output);
+  return 0;
+}
+
+// ---- registration --------------------------------------------------------------------------
+
+void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
+  cmd->add_option("SCORES", o.scores, "CSV of objective scores (e.g. the results of qm3d batch)")
+      ->required();
+  cmd->add_option("MOS", o.mos, "CSV of subjective scores")->required();
+  cmd->add_option("--scores-key", o.scores_key,
+                  "Stimulus column of SCORES (default: 'distorted' if present, else the first)");
+  cmd->add_option("--scores-column", o.scores_column,
+                  "Score column of SCORES (default: 'score', else the other column of two)");
+  cmd->add_option("--mos-key", o.mos_key, "Stimulus column of MOS (default: the first)");
+  cmd->add_option("--mos-column", o.mos_column,
+                  "MOS column of MOS (default: 'mos' in any case, else the other column of two)");
+  cmd->add_option("--ci-column", o.ci_column,
+                  "Column of MOS holding the 95% confidence-interval half-widths; adds the outlier "
+                  "ratio (ITU-T P.1401)");
+  cmd->add_flag("--stem", o.stem,
+                "Match keys by file stem (directories and extension removed), e.g. batch paths "
+                "against stimulus names");
+  cmd->add_option("--bootstrap", o.bootstrap,
+                  "Bootstrap replicates for the 95% intervals (0 = none)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o.seed, "Seed of the bootstrap")->capture_default_str();
+  auto* json = cmd->add_flag("--json", o.json, "Write one JSON object");
+  cmd->add_flag("--csv", o.csv, "Write CSV: statistic,value,ci95_low,ci95_high")->excludes(json);
+  cmd->add_option("-o,--output", o.output, "Write to FILE instead of stdout")->type_name("FILE");
+  cmd->add_option("--plot", o.plot,
+                  "Also draw score vs MOS with the fitted logistic (.svg; .png needs gnuplot)")
+      ->type_name("FILE.svg|png");
+}
+
+void add_train_options(CLI::App* cmd, TrainCommandOptions& o) {
+  cmd->add_option("FEATURES", o.features, "CSV of pooled features f1..f8 (e.g. qm3d batch results)")
+      ->required();
+  cmd->add_option("MOS", o.mos, "CSV of subjective scores")->required();
+  cmd->add_option("--group-by", o.group_by,
+                  "Column(s) whose values are the cross-validation groups (source model, "
+                  "distortion type; several columns pool their folds), in FEATURES or MOS")
+      ->required()
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  cmd->add_option("--features", o.feature_columns,
+                  "Feature column prefixes: columns PREFIX1..PREFIX8, averaged over several "
+                  "prefixes; auto: f1..f8, else the batch columns of the directions every row has")
+      ->capture_default_str();
+  cmd->add_option("--features-key", o.features_key,
+                  "Stimulus column of FEATURES (default: 'distorted' if present, else the first)");
+  cmd->add_option("--mos-key", o.mos_key, "Stimulus column of MOS (default: the first)");
+  cmd->add_option("--mos-column", o.mos_column, "MOS column (default: 'mos' in any case)");
+  cmd->add_flag("--stem", o.stem, "Match keys by file stem");
+  cmd->add_option("--metric", o.metric,
+                  "Metric the model is for, cmdm or pcqm (default: FEATURES' metric column)");
+  cmd->add_option("--subset", o.subsets,
+                  "Only compare this subset (e.g. f2,f5,f6,f7); repeatable (default: all 255)")
+      ->allow_extra_args(false);
+  cmd->add_option("--criterion", o.criterion, "Subset ranking: mean held-out plcc, srocc or both")
+      ->check(CLI::IsMember({"plcc", "srocc", "both"}))
+      ->capture_default_str();
+  cmd->add_option("--select", o.select,
+                  "one-se: fewest features within one standard error of the best; best: the best")
+      ->check(CLI::IsMember({"one-se", "best"}))
+      ->capture_default_str();
+  cmd->add_option("--final", o.final_weights,
+                  "Final weights: mean-of-folds (the CMDM report) or refit on every stimulus")
+      ->check(CLI::IsMember({"mean-of-folds", "refit"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", o.json, "Write the whole result as one JSON object on stdout");
+  cmd->add_option("-o,--output", o.output, "Write the model file (JSON) for --model")
+      ->type_name("MODEL.json");
+  cmd->add_option("--report", o.report, "Write every subset's cross-validation scores")
+      ->type_name("FILE.csv|json");
+}
+
+}  // namespace
+
+std::unique_ptr<EvalCommands> add_eval_commands(CLI::App& app,
+                                                const std::function<void(CLI::App*)>& add_common) {
+  auto c = std::make_unique<EvalCommands>();
+  c->eval = app.add_subcommand(
+      "eval",
+      "Agreement of objective scores with subjective scores: PLCC, SROCC, KROCC, PLCC and "
+      "RMSE after the VQEG logistic mapping, outlier ratio, with bootstrap 95% intervals");
+  add_common(c->eval);
+  add_eval_options(c->eval, c->eval_options);
+  c->train = app.add_subcommand(
+      "train",
+      "Fit the weights of f1..f8 to subjective scores through a logistic link, choosing "
+      "the feature subset by leave-one-group-out cross-validation; writes a model file");
+  add_common(c->train);
+  add_train_options(c->train, c->train_options);
+  return c;
+}
+
+std::optional<int> run_eval_commands(const EvalCommands& commands, bool quiet) {
+  if (commands.eval->parsed()) return run_eval(commands.eval_options, quiet);
+  if (commands.train->parsed()) return run_train(commands.train_options, quiet);
+  return std::nullopt;
+}
+
+}  // namespace qm3d::app

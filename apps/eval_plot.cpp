@@ -1,0 +1,270 @@
+#include "eval_plot.h"
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+
+extern char** environ;
+
+namespace qm3d::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Canvas and frame of the SVG, in pixels.
+constexpr double kWidth = 720, kHeight = 540;
+constexpr double kLeft = 80, kRight = 24, kTop = 48, kBottom = 64;
+constexpr double kTickLength = 5;
+constexpr double kPointRadius = 2.5;
+constexpr int kCurveSamples = 200;
+constexpr double kTargetTicks = 6;
+constexpr double kRangePadding = 0.04;  ///< fraction of the data range added on each side
+constexpr const char* kPointColour = "#1f77b4";
+constexpr const char* kCurveColour = "#d62728";
+/// gnuplot's PNG canvas, in pixels.
+constexpr int kPngWidth = 800, kPngHeight = 600;
+
+struct Range {
+  double lo = 0, hi = 1;
+};
+
+Range padded_range(const std::vector<double>& values) {
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  double span = *hi - *lo;
+  if (!(span > 0)) span = std::max(std::fabs(*lo), 1.0);
+  return {*lo - kRangePadding * span, *hi + kRangePadding * span};
+}
+
+// 1, 2 or 5 times a power of ten, giving about kTargetTicks ticks over `span`.
+double nice_step(double span) {
+  const double raw = span / kTargetTicks;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  const double r = raw / magnitude;
+  return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * magnitude;
+}
+
+std::vector<double> ticks(const Range& r) {
+  const double step = nice_step(r.hi - r.lo);
+  std::vector<double> out;
+  for (double t = std::ceil(r.lo / step) * step; t <= r.hi + 1e-9 * step; t += step) {
+    out.push_back(std::fabs(t) < 1e-12 * step ? 0.0 : t);
+  }
+  return out;
+}
+
+std::string format(const char* spec, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v);
+  return buf;
+}
+
+std::string xml_escaped(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+struct Frame {
+  Range x, y;
+  double px(double v) const {
+    return kLeft + (v - x.lo) / (x.hi - x.lo) * (kWidth - kLeft - kRight);
+  }
+  double py(double v) const {
+    return kHeight - kBottom - (v - y.lo) / (y.hi - y.lo) * (kHeight - kTop - kBottom);
+  }
+};
+
+std::vector<double> curve_samples(const ScatterPlot& p, const Range& x) {
+  std::vector<double> ys;
+  for (int i = 0; i <= kCurveSamples; ++i)
+    ys.push_back(p.curve(x.lo + (x.hi - x.lo) * i / kCurveSamples));
+  return ys;
+}
+
+void svg_axes(std::ostream& out, const Frame& f, const ScatterPlot& p) {
+  const double x0 = kLeft, x1 = kWidth - kRight, y0 = kHeight - kBottom, y1 = kTop;
+  out << "<rect x=\"" << x0 << "\" y=\"" << y1 << "\" width=\"" << x1 - x0 << "\" height=\""
+      << y0 - y1 << "\" fill=\"none\" stroke=\"black\"/>\n";
+  for (double t : ticks(f.x)) {
+    const std::string px = format("%.2f", f.px(t));
+    out << "<line x1=\"" << px << "\" y1=\"" << y0 << "\" x2=\"" << px << "\" y2=\""
+        << y0 + kTickLength << "\" stroke=\"black\"/><text x=\"" << px << "\" y=\"" << y0 + 20
+        << "\" text-anchor=\"middle\">" << format("%.4g", t) << "</text>\n";
+  }
+  for (double t : ticks(f.y)) {
+    const std::string py = format("%.2f", f.py(t));
+    out << "<line x1=\"" << x0 - kTickLength << "\" y1=\"" << py << "\" x2=\"" << x0 << "\" y2=\""
+        << py << "\" stroke=\"black\"/><text x=\"" << x0 - 8 << "\" y=\"" << py
+        << "\" text-anchor=\"end\" dominant-baseline=\"middle\">" << format("%.4g", t)
+        << "</text>\n";
+  }
+  out << "<text x=\"" << (x0 + x1) / 2 << "\" y=\"" << kHeight - 18 << "\" text-anchor=\"middle\">"
+      << xml_escaped(p.x_label) << "</text>\n<text transform=\"translate(20," << (y0 + y1) / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">" << xml_escaped(p.y_label)
+      << "</text>\n<text x=\"" << kWidth / 2
+      << "\" y=\"28\" text-anchor=\"middle\" font-weight=\"bold\">" << xml_escaped(p.title)
+      << "</text>\n";
+}
+
+void svg_data(std::ostream& out, const Frame& f, const ScatterPlot& p,
+              const std::vector<double>& curve) {
+  out << "<g fill=\"" << kPointColour << "\" fill-opacity=\"0.5\">\n";
+  for (std::size_t i = 0; i < p.x.size(); ++i) {
+    out << "<circle cx=\"" << format("%.2f", f.px(p.x[i])) << "\" cy=\""
+        << format("%.2f", f.py(p.y[i])) << "\" r=\"" << kPointRadius << "\"/>\n";
+  }
+  out << "</g>\n<polyline fill=\"none\" stroke=\"" << kCurveColour
+      << "\" stroke-width=\"2\" points=\"";
+  for (int i = 0; i <= kCurveSamples; ++i) {
+    const double x = f.x.lo + (f.x.hi - f.x.lo) * i / kCurveSamples;
+    out << (i ? " " : "") << format("%.2f", f.px(x)) << "," << format("%.2f", f.py(curve[i]));
+  }
+  out << "\"/>\n";
+}
+
+std::string svg_document(const ScatterPlot& p) {
+  Frame f;
+  f.x = padded_range(p.x);
+  const std::vector<double> curve = curve_samples(p, f.x);
+  std::vector<double> all_y = p.y;
+  all_y.insert(all_y.end(), curve.begin(), curve.end());
+  f.y = padded_range(all_y);
+  std::ostringstream out;
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
+      << "width=\"" << kWidth << "\" height=\"" << kHeight << "\" viewBox=\"0 0 " << kWidth << " "
+      << kHeight << "\" font-family=\"sans-serif\" font-size=\"13\">\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  svg_axes(out, f, p);
+  svg_data(out, f, p, curve);
+  out << "</svg>\n";
+  return out.str();
+}
+
+// ---- PNG through gnuplot -------------------------------------------------------------------
+
+std::optional<fs::path> find_program(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::istringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const fs::path candidate = fs::path(dir.empty() ? "." : dir) / name;
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec) && ::access(candidate.c_str(), X_OK) == 0) {
+      return candidate;
+    }
+  }
+  return std::nullopt;
+}
+
+// A gnuplot string literal in single quotes ('' stands for one quote).
+std::string gnuplot_quoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string gnuplot_script(const ScatterPlot& p, const fs::path& output) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "set terminal pngcairo size " << kPngWidth << "," << kPngHeight << "\n"
+    << "set output " << gnuplot_quoted(output.string()) << "\n"
+    << "set title " << gnuplot_quoted(p.title) << " noenhanced\n"
+    << "set xlabel " << gnuplot_quoted(p.x_label) << " noenhanced\n"
+    << "set ylabel " << gnuplot_quoted(p.y_label) << " noenhanced\n"
+    << "set key off\nset grid\n"
+    << "b1 = " << p.curve.beta1 << "; b2 = " << p.curve.beta2 << "; b3 = " << p.curve.beta3
+    << "; b4 = " << p.curve.beta4 << "\n"
+    << "f(x) = b2 + (b1 - b2) / (1 + exp(-(x - b3) / abs(b4)))\n$points << EOD\n";
+  for (std::size_t i = 0; i < p.x.size(); ++i) s << p.x[i] << " " << p.y[i] << "\n";
+  s << "EOD\nset samples " << kCurveSamples
+    << "\nplot $points using 1:2 with points pt 7 ps 0.6 lc rgb '" << kPointColour
+    << "', f(x) with lines lw 2 lc rgb '" << kCurveColour << "'\nset output\n";
+  return s.str();
+}
+
+// Runs `program script` and waits; returns its exit status (-1 when it could not start).
+int run_program(const fs::path& program, const fs::path& script) {
+  std::string arg0 = program.string(), arg1 = script.string();
+  char* argv[] = {arg0.data(), arg1.data(), nullptr};
+  pid_t pid = 0;
+  if (posix_spawn(&pid, program.c_str(), nullptr, nullptr, argv, environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void write_png(const fs::path& path, const ScatterPlot& p) {
+  const auto gnuplot = find_program("gnuplot");
+  if (!gnuplot) {
+    throw InputError(path.string() +
+                     ": PNG plots are drawn by gnuplot, which is not installed "
+                     "(Debian: apt-get install gnuplot-nox); or write an .svg plot");
+  }
+  const std::string unique = std::to_string(::getpid());
+  const fs::path image = path.string() + ".tmp-" + unique + ".png";
+  const fs::path script = fs::temp_directory_path() / ("qm3d-plot-" + unique + ".gp");
+  write_file_atomically(script, [&](std::ostream& out) { out << gnuplot_script(p, image); });
+  const int status = run_program(*gnuplot, script);
+  std::error_code ec;
+  fs::remove(script, ec);
+  if (status != 0 || !fs::is_regular_file(image, ec) || fs::file_size(image, ec) == 0) {
+    fs::remove(image, ec);
+    throw InputError(path.string() + ": gnuplot (" + gnuplot->string() +
+                     ") failed to draw the plot (exit status " + std::to_string(status) + ")");
+  }
+  fs::rename(image, path, ec);
+  if (ec) {
+    fs::remove(image, ec);
+    throw InputError(path.string() + ": cannot write the plot");
+  }
+}
+
+}  // namespace
+
+void write_scatter_plot(const fs::path& path, const ScatterPlot& plot) {
+  if (plot.x.empty() || plot.x.size() != plot.y.size()) {
+    throw std::invalid_argument("scatter plot: no points, or x and y of different lengths");
+  }
+  const std::string ext = lower_extension(path);
+  if (ext == "svg") {
+    const std::string svg = svg_document(plot);
+    write_file_atomically(path, [&](std::ostream& out) { out << svg; });
+  } else if (ext == "png") {
+    write_png(path, plot);
+  } else {
+    throw InputError(path.string() + ": unknown plot format \"" + ext + "\" (use .svg or .png)");
+  }
+}
+
+}  // namespace qm3d::app

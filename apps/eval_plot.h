@@ -1,0 +1,27 @@
+// The scatter plot of `qm3d eval --plot`: objective score against MOS with the fitted logistic.
+// SVG is written directly; PNG is drawn by gnuplot (Debian package gnuplot-nox), run as a child
+// process, and is an error naming the missing program when gnuplot is not installed.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/evaluation.h"
+
+namespace qm3d::app {
+
+struct ScatterPlot {
+  std::vector<double> x;   ///< #n scores
+  std::vector<double> y;   ///< #n MOS
+  LogisticFunction curve;  ///< drawn over the range of x
+  std::string title;
+  std::string x_label;
+  std::string y_label;
+};
+
+/// Writes `plot` to `path` (atomically): `.svg` directly, `.png` through gnuplot.
+/// @throws InputError  another extension, gnuplot missing (for PNG) or failing, write errors
+void write_scatter_plot(const std::filesystem::path& path, const ScatterPlot& plot);
+
+}  // namespace qm3d::app

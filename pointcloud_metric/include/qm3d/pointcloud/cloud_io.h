@@ -1,0 +1,33 @@
+// Reading coloured point clouds: PLY (through qm3d::ply) and PCD (through PCL), chosen by the
+// file extension.
+#pragma once
+
+#include <filesystem>
+
+#include "qm3d/common/types.h"
+
+namespace qm3d::pointcloud {
+
+/// Reads a coloured point cloud; the format is chosen by the extension, case-insensitively.
+///
+/// - `.ply`: ASCII or binary (either endianness); x, y, z of any scalar type (float or double
+///   keep their exact value); colours uchar, ushort or float named red/green/blue, r/g/b or
+///   diffuse_red/green/blue (see qm3d/common/ply.h). Faces, normals and alpha are ignored.
+/// - `.pcd`: ascii, binary or binary_compressed; fields x, y, z (float or double) and a packed
+///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB).
+///
+/// Colours are returned in [0, 1] at double precision; an 8-bit channel u becomes u / 255.0,
+/// exactly as MEPP-team/PCQM converts its colours.
+///
+/// @param[in] path  file to read
+/// @return #P positions and #P colours, in file order
+/// @throws InputError   the file cannot be opened or read
+/// @throws FormatError  unknown extension, malformed content, or no colours
+///                      ("<file>: no vertex colours ...")
+///
+/// \bug OBJ and OFF meshes are not read here (the mesh reader will provide their vertices).
+/// \bug Points with non-finite coordinates (e.g. organised PCD clouds) are returned as they are;
+///      compute_pcqm rejects them.
+ColoredCloud read_cloud(const std::filesystem::path& path);
+
+}  // namespace qm3d::pointcloud

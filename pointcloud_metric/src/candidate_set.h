@@ -1,0 +1,54 @@
+// Batched neighbour queries: the points of a k-d tree near a small box, gathered once and then
+// filtered exactly for each query inside the box.
+//
+// Queries come a leaf at a time (about a dozen nearby points): one box search replaces a dozen
+// tree traversals, and each query scans a short contiguous array. Every candidate's squared
+// distance is computed exactly as KdTree::squared_distance does, so the results are the tree's.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "kd_tree.h"
+
+namespace qm3d::pointcloud::detail {
+
+/// Axis-aligned bounding box of tree points [first, last).
+struct Box {
+  Vec3 lo{0, 0, 0};
+  Vec3 hi{0, 0, 0};
+};
+Box box_of(const std::vector<Vec3>& points, std::uint32_t first, std::uint32_t last);
+
+class CandidateSet {
+ public:
+  /// Gathers every point of `tree` within sqrt(radius2) of `box`.
+  void gather(const KdTree& tree, const Box& box, double radius2);
+
+  /// Candidates strictly within sqrt(radius2) of q, in tree order. Exact (equal to
+  /// tree.radius_search) when q lies in the gathered box and radius2 <= the gathered radius2.
+  void radius(const Vec3& q, double radius2, std::vector<Neighbour>& out);
+
+  /// The k nearest candidates and those strictly within sqrt(radius2), both sorted by
+  /// (distance, index); returns the k-th squared distance (0 when k = 0). Only candidates
+  /// within sqrt(knn_bound2) are ranked. Exact (the tree's kNN, ties broken by index) when q
+  /// lies in the box, radius2 <= the gathered radius2, and q's k-th nearest distance in the
+  /// tree is at most both sqrt(knn_bound2) and the gathered radius.
+  double knn_radius(const Vec3& q, std::size_t k, double knn_bound2, double radius2,
+                    std::vector<Neighbour>& nearest, std::vector<Neighbour>& within);
+
+  std::size_t size() const { return index_.size(); }
+
+ private:
+  void distances(const Vec3& q);
+  template <bool kStrict>
+  std::size_t select(double bound2, std::vector<Neighbour>& out) const;
+  void split_at_radius(double radius2, std::vector<Neighbour>& within);
+
+  std::vector<std::uint32_t> index_;
+  std::vector<double> x_, y_, z_;  // candidate coordinates, structure of arrays
+  std::vector<double> d2_;         // squared distances to the current query
+  std::vector<Neighbour> survivors_, outside_;
+};
+
+}  // namespace qm3d::pointcloud::detail

@@ -1,0 +1,121 @@
+#include "qm3d/pointcloud/pcqm.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "pcqm_internal.h"
+#include "qm3d/common/color.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/pooling.h"
+
+namespace qm3d::pointcloud {
+namespace {
+
+/// Relative gap between the reference's |min| + |max| box size and the true longest side above
+/// which compute_pcqm warns (the radii then differ by as much from the translation-free ones).
+constexpr double kBboxQuirkWarningGap = 0.01;
+
+std::string number(double v) {
+  std::ostringstream o;
+  o.precision(17);
+  o << v;
+  return o.str();
+}
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument("PCQM options: " + message);
+}
+
+void validate(const PcqmOptions& o) {
+  require(std::isfinite(o.radius_rel) && o.radius_rel > 0,
+          "radius_rel must be positive and finite, got " + number(o.radius_rel));
+  require(o.knn >= 1, "knn must be at least 1, got " + std::to_string(o.knn));
+  require(std::isfinite(o.radius_factor) && o.radius_factor > 0,
+          "radius_factor must be positive and finite, got " + number(o.radius_factor));
+  require(o.threads >= 0,
+          "threads must be 0 (OpenMP default) or positive, got " + std::to_string(o.threads));
+  require(o.bbox == BboxMode::kReference || o.bbox == BboxMode::kExtent, "unknown bbox mode");
+}
+
+void validate(const ColoredCloud& cloud, const std::string& name) {
+  if (cloud.positions.empty()) throw NumericError("PCQM: the " + name + " cloud is empty");
+  if (cloud.colors.size() != cloud.positions.size()) {
+    throw NumericError("PCQM: the " + name + " cloud has " +
+                       std::to_string(cloud.positions.size()) + " points but " +
+                       std::to_string(cloud.colors.size()) + " colours");
+  }
+  for (std::size_t i = 0; i < cloud.positions.size(); ++i) {
+    const Vec3& p = cloud.positions[i];
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      throw NumericError("PCQM: point " + std::to_string(i) + " of the " + name +
+                         " cloud has a non-finite coordinate");
+    }
+  }
+}
+
+/// maxDim of the iterated cloud per `mode`; warns when the reference's quirk is far off.
+double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name,
+               std::vector<std::string>& warnings) {
+  const double extent = bounding_box(cloud.positions).longest_side();
+  if (!(extent > 0)) {
+    throw NumericError("PCQM: the " + name + " cloud's bounding box has zero size");
+  }
+  if (mode == BboxMode::kExtent) return extent;
+  const double quirk = detail::reference_max_dim(cloud.positions);
+  if (std::abs(quirk - extent) > kBboxQuirkWarningGap * extent) {
+    warnings.push_back("PCQM: the " + name + " cloud's box size |min| + |max| = " + number(quirk) +
+                       " differs from its longest side " + number(extent) +
+                       " (the cloud does not straddle the origin); radii and curvatures follow "
+                       "the reference implementation's value, use BboxMode::kExtent for a "
+                       "translation-invariant score");
+  }
+  return quirk;
+}
+
+PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
+                        const std::string& iterated_name, const PcqmOptions& o,
+                        const Lab2000hlTable& table, std::vector<std::string>& warnings) {
+  detail::DirectionParams params;
+  params.max_dim = max_dim(iterated, o.bbox, iterated_name, warnings);
+  params.radius_rel = o.radius_rel;
+  params.radius_factor = o.radius_factor;
+  params.knn = static_cast<std::size_t>(o.knn);
+  params.threads = o.threads;
+  const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
+
+  PcqmDirection d;
+  d.features = mean_features(out.features);
+  d.score = o.model.apply(d.features);
+  d.bbox_max_side = params.max_dim;
+  if (o.per_point) {
+    d.per_point.resize(out.features.size());
+    for (std::size_t i = 0; i < out.features.size(); ++i) {
+      d.per_point[i] = o.model.apply(out.features[i]);
+    }
+  }
+  return d;
+}
+
+}  // namespace
+
+PcqmResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& distorted,
+                        const PcqmOptions& options) {
+  validate(options);
+  validate(reference, "reference");
+  validate(distorted, "distorted");
+  const auto table = Lab2000hlTable::shared(resolve_data_dir(options.data_dir));
+
+  PcqmResult result;
+  result.ref_to_dist =
+      direction(reference, distorted, "reference", options, *table, result.warnings);
+  result.score = result.ref_to_dist.score;
+  if (options.symmetric) {
+    result.dist_to_ref =
+        direction(distorted, reference, "distorted", options, *table, result.warnings);
+    result.score = 0.5 * (result.ref_to_dist.score + result.dist_to_ref->score);
+  }
+  return result;
+}
+
+}  // namespace qm3d::pointcloud

@@ -1,0 +1,365 @@
+// One direction of PCQM (SPEC-PCQM 1.4 and 1.5). Points are processed in the order of the
+// iterated cloud's k-d tree, which is spatially coherent: consecutive queries touch the same tree
+// nodes and, in stage 2, neighbours' stage-1 values lie close together in memory. Results are
+// written per point and summed later in input order, so any thread count gives the same bits.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+
+#include "candidate_set.h"
+#include "kd_tree.h"
+#include "pcqm_internal.h"
+#include "qm3d/common/statistics.h"
+#include "quadric_fit.h"
+
+namespace qm3d::pointcloud::detail {
+namespace {
+
+/// k-d tree leaves (about 12 points each, queried as one batch) per dynamic-schedule chunk: large
+/// enough to keep a thread's queries spatially coherent, small enough to balance clouds of
+/// uneven density. Batches of 2 or 4 leaves measured the same on the 1M and 2M spheres.
+constexpr std::int64_t kLeavesPerChunk = 16;
+/// Relative slack on the kNN reach of a leaf, covering the rounding of its computation.
+constexpr double kReachSlack = 1.0 + 1e-9;
+
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+struct Radii {
+  double curvature2;   ///< r^2, passed as `radius * radius` (main.cpp)
+  double statistics2;  ///< (rx r)^2, passed as `std::pow(rx r, 2.0)` (compute_statistics)
+  double sigma;        ///< rx r / 2 (`debug_variance`)
+};
+
+Radii radii_of(const DirectionParams& p) {
+  const double r = p.radius_rel * p.max_dim;
+  const double stat = r * p.radius_factor;
+  return Radii{r * r, std::pow(stat, 2.0), stat / 2.0};
+}
+
+/// `compute_distance` of main.cpp.
+double point_distance(const Vec3& a, const Vec3& b) {
+  return std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                   (b[2] - a[2]) * (b[2] - a[2]));
+}
+
+/// Stage-1 values of each point of the iterated cloud, in its tree order.
+struct PointData {
+  explicit PointData(std::size_t n, bool diagnostics)
+      : correspondence(n),
+        correspondence_is_point(n),
+        curvature_ref(n),
+        curvature_dist(n),
+        lightness_ref(n),
+        lightness_dist(n),
+        chroma_ref(n),
+        chroma_dist(n),
+        hue_difference(n) {
+    if (diagnostics) {
+      lab_ref.resize(n);
+      lab_dist.resize(n);
+      count_radius_dist.resize(n);
+      count_radius_ref.resize(n);
+    }
+  }
+  std::vector<Vec3> correspondence;
+  std::vector<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
+  std::vector<double> curvature_ref, curvature_dist;
+  std::vector<double> lightness_ref, lightness_dist, chroma_ref, chroma_dist, hue_difference;
+  std::vector<Lab> lab_ref, lab_dist;                              // diagnostics only
+  std::vector<std::uint32_t> count_radius_dist, count_radius_ref;  // diagnostics only
+};
+
+/// The two clouds with their trees; indices are tree indices. When both clouds have the same
+/// positions in the same order (a colour-only distortion) they share one tree.
+struct Clouds {
+  const ColoredCloud& ref;
+  const ColoredCloud& dist;
+  const KdTree& ref_tree;
+  const KdTree& dist_tree;
+  bool same_positions;
+};
+
+struct Stage1Scratch {
+  CandidateSet near_dist;   ///< D's points within r of the leaf's box
+  CandidateSet reach_dist;  ///< D's points within the leaf's kNN reach (gathered when needed)
+  CandidateSet near_ref;    ///< R's points within r of the leaf's box (when positions differ)
+  bool have_reach = false;
+  std::vector<Neighbour> nearest, within_dist, within_ref;
+  QuadricFitter fitter;
+  // The last query whose kNN was computed and its k-th nearest distance on D: they bound the
+  // next query's k-th distance by the triangle inequality, d_k(q) <= d_k(prev) + |q - prev|.
+  Vec3 previous{0, 0, 0};
+  double previous_kth = 0;
+};
+
+bool same_coordinates(const std::vector<Vec3>& a_points, const std::vector<Neighbour>& a,
+                      const std::vector<Vec3>& b_points, const std::vector<Neighbour>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a_points[a[i].index] != b_points[b[i].index]) return false;
+  }
+  return true;
+}
+
+/// k_D and k_R: |H| maxDim of the quadrics fitted to D's and R's points within r of p, both
+/// lists sorted by distance. The fit is a pure function of the neighbour coordinates, so when
+/// both lists hold the same coordinates (unchanged geometry) it is computed once.
+void curvatures(std::size_t i, const Clouds& c, const DirectionParams& params,
+                const std::vector<Neighbour>& within_dist, const std::vector<Neighbour>& within_ref,
+                QuadricFitter& fitter, PointData& out) {
+  const Vec3& p = c.ref_tree.points()[i];
+  const double h_dist = fitter.fit(p, c.dist_tree.points(), within_dist).mean_curvature;
+  const double h_ref =
+      same_coordinates(c.dist_tree.points(), within_dist, c.ref_tree.points(), within_ref)
+          ? h_dist
+          : fitter.fit(p, c.ref_tree.points(), within_ref).mean_curvature;
+  out.curvature_dist[i] = std::abs(h_dist) * params.max_dim;
+  out.curvature_ref[i] = std::abs(h_ref) * params.max_dim;
+}
+
+/// LAB2000HL of p's colour and of nn_D(p)'s colour, chroma, and the hue difference.
+void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab2000hlTable& table,
+             PointData& out) {
+  const Lab ref = table.from_srgb(c.ref.colors[c.ref_tree.input_index()[i]]);
+  const Lab dist = table.from_srgb(c.dist.colors[c.dist_tree.input_index()[nearest]]);
+  out.lightness_ref[i] = ref.L;
+  out.lightness_dist[i] = dist.L;
+  out.chroma_ref[i] = chroma(ref);
+  out.chroma_dist[i] = chroma(dist);
+  out.hue_difference[i] = hue_difference(ref, dist);
+  if (!out.lab_ref.empty()) {
+    out.lab_ref[i] = ref;
+    out.lab_dist[i] = dist;
+  }
+}
+
+/// Gathers D's points within the kNN reach of the leaf: d_k(q) <= d_k(p0) + |q - p0| for the
+/// leaf's first point p0. Also starts the chain of kNN bounds at p0.
+void gather_reach(const std::array<std::uint32_t, 2>& leaf, const Clouds& c, std::size_t k,
+                  const Radii& radii, Stage1Scratch& s) {
+  const std::vector<Vec3>& points = c.ref_tree.points();
+  const Vec3& p0 = points[leaf[0]];
+  c.dist_tree.knn_search(p0, k, s.nearest);
+  double spread2 = 0;
+  for (std::uint32_t i = leaf[0] + 1; i < leaf[1]; ++i) {
+    spread2 = std::max(spread2, squared_distance(p0, points[i]));
+  }
+  s.previous = p0;
+  s.previous_kth = std::sqrt(s.nearest.back().distance2);
+  const double reach = (s.previous_kth + std::sqrt(spread2)) * kReachSlack;
+  s.reach_dist.gather(c.dist_tree, box_of(points, leaf[0], leaf[1]),
+                      std::max(radii.curvature2, reach * reach));
+  s.have_reach = true;
+}
+
+/// nn_D(p) (returned, a D tree index), D's points within r of p (s.within_dist, sorted) and
+/// p-hat (SPEC-PCQM 1.4 step 3): the foot point of the quadric fitted to p's kNN on D when it is
+/// not farther from p than nn_D(p), else nn_D(p). When a point of D coincides with p, it is
+/// nn_D(p) and the foot point can only tie with it at distance 0: no kNN, no fit.
+std::uint32_t match(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const Clouds& c,
+                    const DirectionParams& params, const Radii& radii, Stage1Scratch& s,
+                    Vec3& correspondence) {
+  const Vec3& p = c.ref_tree.points()[i];
+  const std::vector<Vec3>& dist_points = c.dist_tree.points();
+  s.near_dist.radius(p, radii.curvature2, s.within_dist);
+  sort_by_distance(s.within_dist);
+  if (!s.within_dist.empty() && s.within_dist.front().distance2 == 0) {
+    correspondence = dist_points[s.within_dist.front().index];
+    return s.within_dist.front().index;
+  }
+  if (!s.have_reach) gather_reach(leaf, c, params.knn, radii, s);
+  const double bound = (s.previous_kth + std::sqrt(squared_distance(p, s.previous))) * kReachSlack;
+  s.previous_kth = std::sqrt(s.reach_dist.knn_radius(p, params.knn, bound * bound, radii.curvature2,
+                                                     s.nearest, s.within_dist));
+  s.previous = p;
+  const Vec3& closest = dist_points[s.nearest.front().index];
+  const Vec3 foot = s.fitter.fit(p, dist_points, s.nearest).foot;
+  correspondence = point_distance(p, foot) <= point_distance(p, closest) ? foot : closest;
+  return s.nearest.front().index;
+}
+
+void stage1_point(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const Clouds& c,
+                  const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
+                  Stage1Scratch& s, PointData& out) {
+  const Vec3& p = c.ref_tree.points()[i];
+  const std::uint32_t nearest = match(leaf, i, c, params, radii, s, out.correspondence[i]);
+  out.correspondence_is_point[i] = out.correspondence[i] == p;
+  const std::vector<Neighbour>& within_ref = c.same_positions ? s.within_dist : s.within_ref;
+  if (!c.same_positions) {
+    s.near_ref.radius(p, radii.curvature2, s.within_ref);
+    sort_by_distance(s.within_ref);
+  }
+  if (!out.count_radius_dist.empty()) {
+    out.count_radius_dist[i] = static_cast<std::uint32_t>(s.within_dist.size());
+    out.count_radius_ref[i] = static_cast<std::uint32_t>(within_ref.size());
+  }
+  curvatures(i, c, params, s.within_dist, within_ref, s.fitter, out);
+  colours(i, nearest, c, table, out);
+}
+
+void stage1_leaf(const std::array<std::uint32_t, 2>& leaf, const Clouds& c,
+                 const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
+                 Stage1Scratch& s, PointData& out) {
+  const Box box = box_of(c.ref_tree.points(), leaf[0], leaf[1]);
+  s.near_dist.gather(c.dist_tree, box, radii.curvature2);
+  s.have_reach = false;
+  if (!c.same_positions) s.near_ref.gather(c.ref_tree, box, radii.curvature2);
+  for (std::uint32_t i = leaf[0]; i < leaf[1]; ++i) {
+    stage1_point(leaf, i, c, params, radii, table, s, out);
+  }
+}
+
+PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
+                 const Lab2000hlTable& table) {
+  const auto& leaves = c.ref_tree.leaves();
+  const auto n = static_cast<std::int64_t>(leaves.size());
+  PointData out(c.ref_tree.size(), params.diagnostics);
+#pragma omp parallel num_threads(thread_count(params.threads))
+  {
+    Stage1Scratch scratch;
+#pragma omp for schedule(dynamic, kLeavesPerChunk)
+    for (std::int64_t l = 0; l < n; ++l) {
+      stage1_leaf(leaves[std::size_t(l)], c, params, radii, table, scratch, out);
+    }
+  }
+  return out;
+}
+
+struct Stage2Scratch {
+  CandidateSet candidates;
+  std::vector<Neighbour> within;
+  NeighbourhoodSamples samples;
+};
+
+/// Paired samples of p's statistics neighbourhood N(p) (R's points within rx r): w1 from
+/// |p - q_j|, w2 from |p-hat - q-hat_j| (equal to w1 when both correspondences are the points
+/// themselves); R side = index 1, D side = index 2 (compute_statistics).
+void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage2Scratch& s) {
+  NeighbourhoodSamples& out = s.samples;
+  const std::size_t n = s.within.size();
+  for (auto* v : {&out.w1, &out.w2, &out.curv1, &out.curv2, &out.light1, &out.light2, &out.chroma1,
+                  &out.chroma2, &out.hue_diff}) {
+    v->resize(n);
+  }
+  const bool i_is_point = d.correspondence_is_point[i] != 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t j = s.within[k].index;
+    const double w1 = gaussian_weight(std::sqrt(s.within[k].distance2), radii.sigma);
+    out.w1[k] = w1;
+    out.w2[k] = i_is_point && d.correspondence_is_point[j] != 0
+                    ? w1
+                    : gaussian_weight(point_distance(d.correspondence[i], d.correspondence[j]),
+                                      radii.sigma);
+    out.curv1[k] = d.curvature_ref[j];
+    out.curv2[k] = d.curvature_dist[j];
+    out.light1[k] = d.lightness_ref[j];
+    out.light2[k] = d.lightness_dist[j];
+    out.chroma1[k] = d.chroma_ref[j];
+    out.chroma2[k] = d.chroma_dist[j];
+    out.hue_diff[k] = d.hue_difference[j];
+  }
+}
+
+/// f1..f8 of the points of one leaf, stored at their input indices.
+void stage2_leaf(const std::array<std::uint32_t, 2>& leaf, const KdTree& ref_tree,
+                 const PointData& d, const Radii& radii, Stage2Scratch& s,
+                 std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
+  s.candidates.gather(ref_tree, box_of(ref_tree.points(), leaf[0], leaf[1]), radii.statistics2);
+  for (std::uint32_t i = leaf[0]; i < leaf[1]; ++i) {
+    s.candidates.radius(ref_tree.points()[i], radii.statistics2, s.within);
+    gather_samples(i, d, radii, s);
+    const std::uint32_t input = ref_tree.input_index()[i];
+    features[input] = local_features(s.samples, kPcqmConventions);
+    if (counts != nullptr) (*counts)[input] = static_cast<std::uint32_t>(s.within.size());
+  }
+}
+
+std::vector<FeatureVector> stage2(const KdTree& ref_tree, const PointData& d,
+                                  const DirectionParams& params, const Radii& radii,
+                                  std::vector<std::uint32_t>* counts) {
+  const auto& leaves = ref_tree.leaves();
+  const auto n = static_cast<std::int64_t>(leaves.size());
+  std::vector<FeatureVector> features(ref_tree.size());
+#pragma omp parallel num_threads(thread_count(params.threads))
+  {
+    Stage2Scratch scratch;
+#pragma omp for schedule(dynamic, kLeavesPerChunk)
+    for (std::int64_t l = 0; l < n; ++l) {
+      stage2_leaf(leaves[std::size_t(l)], ref_tree, d, radii, scratch, features, counts);
+    }
+  }
+  return features;
+}
+
+template <typename T>
+std::vector<T> to_input_order(const std::vector<T>& tree_order, const KdTree& tree) {
+  std::vector<T> out(tree_order.size());
+  for (std::size_t i = 0; i < tree_order.size(); ++i) out[tree.input_index()[i]] = tree_order[i];
+  return out;
+}
+
+PointDiagnostics diagnostics_of(const PointData& d, const KdTree& tree) {
+  PointDiagnostics out;
+  out.correspondence = to_input_order(d.correspondence, tree);
+  out.curvature_ref = to_input_order(d.curvature_ref, tree);
+  out.curvature_dist = to_input_order(d.curvature_dist, tree);
+  out.lab_ref = to_input_order(d.lab_ref, tree);
+  out.lab_dist = to_input_order(d.lab_dist, tree);
+  out.chroma_ref = to_input_order(d.chroma_ref, tree);
+  out.chroma_dist = to_input_order(d.chroma_dist, tree);
+  out.hue_difference = to_input_order(d.hue_difference, tree);
+  out.count_radius_dist = to_input_order(d.count_radius_dist, tree);
+  out.count_radius_ref = to_input_order(d.count_radius_ref, tree);
+  return out;
+}
+
+}  // namespace
+
+double reference_max_dim(const std::vector<Vec3>& positions) {
+  // PointSet.h initialises min to DBL_MAX and max to numeric_limits<double>::min() = +2.2e-308.
+  Vec3 lo;
+  Vec3 hi;
+  lo.fill(std::numeric_limits<double>::max());
+  hi.fill(std::numeric_limits<double>::min());
+  for (const Vec3& p : positions) {
+    for (int a = 0; a < 3; ++a) {
+      hi[a] = hi[a] > p[a] ? hi[a] : p[a];
+      lo[a] = lo[a] < p[a] ? lo[a] : p[a];
+    }
+  }
+  // main.cpp: rangeX = |xmin| + |xmax|, maxDim = max(rangeX, max(rangeY, rangeZ)).
+  const double x = std::abs(lo[0]) + std::abs(hi[0]);
+  const double y = std::abs(lo[1]) + std::abs(hi[1]);
+  const double z = std::abs(lo[2]) + std::abs(hi[2]);
+  return std::max(x, std::max(y, z));
+}
+
+DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& dist,
+                                  const DirectionParams& params, const Lab2000hlTable& table) {
+  const bool same_positions = ref.positions == dist.positions;
+  const KdTree ref_tree(ref.positions, params.threads);
+  std::optional<KdTree> own_dist_tree;
+  if (!same_positions) own_dist_tree.emplace(dist.positions, params.threads);
+  const KdTree& dist_tree = same_positions ? ref_tree : *own_dist_tree;
+  DirectionParams p = params;
+  p.knn = std::min(params.knn, dist_tree.size());
+  const Radii radii = radii_of(p);
+  const Clouds clouds{ref, dist, ref_tree, dist_tree, same_positions};
+
+  PointData data = stage1(clouds, p, radii, table);
+  DirectionOutput out;
+  std::vector<std::uint32_t> counts;
+  if (p.diagnostics) counts.resize(ref_tree.size());
+  out.features = stage2(ref_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
+  if (p.diagnostics) {
+    out.diagnostics = diagnostics_of(data, ref_tree);
+    out.diagnostics.count_statistics = std::move(counts);
+  }
+  return out;
+}
+
+}  // namespace qm3d::pointcloud::detail

@@ -1,0 +1,53 @@
+// PCQM internals shared by pcqm.cpp and the tests: one direction of the metric with optional
+// per-point diagnostics (the values MEPP-team/PCQM holds per point, for comparing with its dumps).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "qm3d/common/color.h"
+#include "qm3d/common/features.h"
+#include "qm3d/common/types.h"
+
+namespace qm3d::pointcloud::detail {
+
+/// Everything one direction needs, already resolved from PcqmOptions.
+struct DirectionParams {
+  double max_dim = 0;          ///< bounding-box size: scales the radii and the curvatures
+  double radius_rel = 0.004;   ///< r = radius_rel * max_dim
+  double radius_factor = 2.0;  ///< statistics radius = radius_factor * r
+  std::size_t knn = 20;        ///< k of the correspondence kNN (already <= #points allowed)
+  int threads = 0;             ///< 0 = OpenMP default
+  bool diagnostics = false;    ///< fill DirectionOutput::diagnostics
+};
+
+/// Per-point intermediate values, in the iterated cloud's input order (SPEC-PCQM 1.4, 1.5).
+struct PointDiagnostics {
+  std::vector<Vec3> correspondence;    ///< p-hat: foot point on D or nn_D(p)
+  std::vector<double> curvature_ref;   ///< k_R = |H| maxDim from R's points within r
+  std::vector<double> curvature_dist;  ///< k_D = |H| maxDim from D's points within r
+  std::vector<Lab> lab_ref;            ///< LAB2000HL of p's colour
+  std::vector<Lab> lab_dist;           ///< LAB2000HL of nn_D(p)'s colour
+  std::vector<double> chroma_ref, chroma_dist, hue_difference;
+  std::vector<std::uint32_t> count_radius_dist;  ///< #D points within r
+  std::vector<std::uint32_t> count_radius_ref;   ///< #R points within r
+  std::vector<std::uint32_t> count_statistics;   ///< #R points within radius_factor r
+};
+
+struct DirectionOutput {
+  /// f1..f8 of each point (f4..f8 as 1 - similarity), in the iterated cloud's input order.
+  std::vector<FeatureVector> features;
+  PointDiagnostics diagnostics;  ///< empty unless DirectionParams::diagnostics
+};
+
+/// The reference's bounding-box size: max over axes of |min| + |max|, max starting at DBL_MIN
+/// (PointSet.h `read_ply_file`). `positions` must not be empty.
+double reference_max_dim(const std::vector<Vec3>& positions);
+
+/// One direction of PCQM: iterates `ref`'s points, finds their correspondences on `dist`.
+/// Both clouds must be non-empty with one colour per point (compute_pcqm checks this).
+/// Deterministic: bit-identical for any thread count.
+DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& dist,
+                                  const DirectionParams& params, const Lab2000hlTable& table);
+
+}  // namespace qm3d::pointcloud::detail

@@ -1,0 +1,45 @@
+// The local quadric fit of MEPP-team/PCQM (`computeProjectionAndCurvature`, SPEC-PCQM 1.4 step 2):
+// PCA frame of the neighbours, least-squares height field z = a x^2 + b y^2 + c xy + d x + e y + f
+// around the query point, foot point and mean curvature at x = y = 0.
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "kd_tree.h"
+#include "qm3d/common/types.h"
+
+namespace qm3d::pointcloud::detail {
+
+struct QuadricFit {
+  Vec3 foot{0, 0, 0};         ///< origin + f n: the origin projected onto the fitted surface
+  double mean_curvature = 0;  ///< H at the origin (signed, in inverse coordinate units)
+};
+
+/// Fits quadrics; holds the Eigen workspaces so that one fitter per thread allocates little.
+///
+/// Bit-for-bit the reference's arithmetic: raw second moment minus the mean's outer product,
+/// `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
+/// differently), frame t1 = largest, t2 = middle, n = smallest eigenvector, coordinates relative
+/// to the origin, `ColPivHouseholderQR<MatrixXd>` (its basic solution when there are fewer than
+/// six points). With no neighbour at all the result is the origin and H = 0, which is what the
+/// reference's QR returns for an empty system (without its NaN foot point).
+class QuadricFitter {
+ public:
+  /// `neighbours` index `points`; their order is the summation order.
+  QuadricFit fit(const Vec3& origin, const std::vector<Vec3>& points,
+                 const std::vector<Neighbour>& neighbours);
+
+ private:
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen_{3};
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;
+  Eigen::MatrixXd design_;
+  Eigen::VectorXd heights_;
+};
+
+/// Mean curvature of the graph of z = f(x, y) at the origin from f's first and second
+/// derivatives (do Carmo, "Differential Geometry of Curves and Surfaces", 3-3, ex. 21), written
+/// as the reference writes it.
+double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double fxy);
+
+}  // namespace qm3d::pointcloud::detail

@@ -1,0 +1,437 @@
+// End-to-end tests of `qm3d eval`, `qm3d train` and `--model`, running the built binary.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+
+#include "qm3d/common/evaluation.h"
+#include "qm3d/common/pooling.h"
+#include "test_paths.h"
+
+namespace qm3d {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+double normal(std::mt19937_64& rng) {
+  const double u1 = 1 - uniform01(rng), u2 = uniform01(rng);
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+}
+
+std::string exact(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+fs::path mos_dir() { return test::shared_data() / "mos"; }
+std::string basics_scores() { return (mos_dir() / "basics_pcqm_predictions.csv").string(); }
+std::string basics_mos() { return (mos_dir() / "basics_mos.csv").string(); }
+
+class EvalCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           (std::string("qm3d_eval_cli_") +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "cwd");
+    fs::create_directories(dir_ / "io");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs qm3d with `args` (after `env`, e.g. "PATH=/none") in an empty working directory,
+  // checked to stay empty.
+  CliRun qm3d(const std::string& args, const std::string& env = "") {
+    const fs::path out = dir_ / "io" / "stdout", err = dir_ / "io" / "stderr";
+    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && " + env + " '" + QM3D_BINARY +
+                            "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    EXPECT_TRUE(fs::is_empty(dir_ / "cwd"))
+        << "qm3d " << args << " wrote into the working directory";
+    return r;
+  }
+
+  fs::path file(const std::string& name, const std::string& content) {
+    const fs::path p = dir_ / "io" / name;
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+// ---- eval ----------------------------------------------------------------------------------
+
+TEST_F(EvalCli, BasicsReproducesThePublishedCorrelations) {
+  const CliRun r = qm3d("eval " + basics_scores() + " " + basics_mos() + " --json --bootstrap 200");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["stimuli"], 1140);
+  EXPECT_EQ(j["scores"]["key"], "ppc");
+  EXPECT_EQ(j["scores"]["column"], "predictions");
+  EXPECT_EQ(j["mos"]["key"], "stimulus");
+  const json& s = j["statistics"];
+  // Acceptance (issue 9): Spearman -0.788 and plain Pearson -0.837, +-0.001.
+  EXPECT_NEAR(s["srocc"]["value"].get<double>(), -0.788, 0.001);
+  EXPECT_NEAR(s["plcc"]["value"].get<double>(), -0.837, 0.001);
+  // shared/data/README.md gives -0.7878 and -0.8368.
+  EXPECT_NEAR(s["srocc"]["value"].get<double>(), -0.7878, 5e-5);
+  EXPECT_NEAR(s["plcc"]["value"].get<double>(), -0.8368, 5e-5);
+  EXPECT_GT(std::fabs(s["plcc_logistic"]["value"].get<double>()),
+            std::fabs(s["plcc"]["value"].get<double>()));
+  EXPECT_TRUE(j["logistic"]["converged"].get<bool>());
+  const auto ci = s["srocc"]["ci95"];
+  EXPECT_LT(ci[0].get<double>(), -0.7878);
+  EXPECT_GT(ci[1].get<double>(), -0.7878);
+  EXPECT_EQ(j["bootstrap"]["used"], 200);
+  EXPECT_FALSE(s.contains("outlier_ratio"));
+  // The 360 predictions without a MOS are reported, not silently dropped.
+  EXPECT_EQ(j["unmatched"]["scores"]["count"], 360);
+  EXPECT_EQ(j["unmatched"]["scores"]["first"].size(), 5u);
+  EXPECT_EQ(j["unmatched"]["mos"]["count"], 0);
+  EXPECT_NE(r.err.find("basics_pcqm_predictions.csv: 360 rows have no partner in"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(j["unmatched"]["scores"]["first"][0].get<std::string>()), std::string::npos);
+}
+
+TEST_F(EvalCli, TextAndCsvOutputsAreDeterministic) {
+  const std::string args = "eval " + basics_scores() + " " + basics_mos() + " --bootstrap 50 -q";
+  const CliRun a = qm3d(args), b = qm3d(args);
+  ASSERT_EQ(a.code, 0) << a.err;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_EQ(a.err, "");  // -q
+  EXPECT_NE(a.out.find("1140 stimuli"), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("SROCC               -0.7878"), std::string::npos) << a.out;
+  EXPECT_NE(qm3d(args + " --seed 2").out, a.out);
+  const fs::path csv = dir_ / "io" / "stats.csv";
+  ASSERT_EQ(qm3d(args + " --csv -o " + csv.string()).code, 0);
+  const std::string text = slurp(csv);
+  EXPECT_EQ(text.rfind("statistic,value,ci95_low,ci95_high\nstimuli,1140,,\nplcc,-0.83683", 0), 0u)
+      << text;
+  EXPECT_NE(text.find("\nrmse_logistic,0.497"), std::string::npos) << text;
+}
+
+TEST_F(EvalCli, OutlierRatioFromTheMosConfidenceIntervals) {
+  // Scores made up for the CMDM dataset's MOS (a noisy decreasing function of it).
+  const fs::path mos = mos_dir() / "cmdm_vertexcolor_db_All_Stimuli_MOS_and_MLE.csv";
+  std::ifstream in(mos);
+  std::string line;
+  std::getline(in, line);
+  std::mt19937_64 rng(5);
+  std::ostringstream scores;
+  scores << "stimulus,score\n";
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string key, mos_cell;
+    std::getline(fields, key, ',');
+    for (int c = 1; c < 8; ++c) std::getline(fields, mos_cell, ',');  // MOS: column 8
+    scores << key << "," << exact(0.2 / (std::stod(mos_cell) + 0.3 * normal(rng) + 0.5)) << "\n";
+  }
+  const fs::path s = file("cmdm_scores.csv", scores.str());
+  const CliRun r = qm3d("eval " + s.string() + " " + mos.string() +
+                        " --mos-column MOS --ci-column CI --bootstrap 100 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["stimuli"], 480);
+  EXPECT_EQ(j["mos"]["key"], "Stimuli");
+  EXPECT_EQ(j["mos"]["ci_column"], "CI");
+  const double ratio = j["statistics"]["outlier_ratio"]["value"].get<double>();
+  EXPECT_GT(ratio, 0.0);
+  EXPECT_LT(ratio, 1.0);
+  EXPECT_LT(j["statistics"]["plcc"]["value"].get<double>(), -0.5);
+}
+
+TEST_F(EvalCli, StemMatchesBatchPathsToStimulusNames) {
+  const fs::path scores = file("results.csv",
+                               "reference,distorted,metric,score,status\n"
+                               "/r/a.ply,/d/s1.ply,pcqm,0.1,ok\n/r/a.ply,/d/s2.ply,pcqm,0.2,ok\n"
+                               "/r/a.ply,/d/s3.ply,pcqm,0.35,ok\n/r/a.ply,/d/s4.ply,pcqm,,error\n"
+                               "/r/a.ply,/d/s5.ply,pcqm,0.5,ok\n/r/a.ply,/d/s6.ply,pcqm,0.6,ok\n");
+  const fs::path mos =
+      file("mos.csv", "name,MOS\ns1,4.9\ns2,4.1\ns3,3.2\ns4,3\ns5,1.5\ns6,1.1\ns7,2\n");
+  const CliRun plain = qm3d("eval " + scores.string() + " " + mos.string());
+  EXPECT_EQ(plain.code, 2);
+  EXPECT_NE(plain.err.find("no stimulus in common"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("try --stem"), std::string::npos) << plain.err;
+  const CliRun r =
+      qm3d("eval " + scores.string() + " " + mos.string() + " --stem --json --bootstrap 20");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["scores"]["key"], "distorted");
+  EXPECT_EQ(j["scores"]["column"], "score");
+  EXPECT_EQ(j["stimuli"], 5);
+  EXPECT_EQ(j["missing_values"]["first"], json::array({"s4"}));  // the failed pair
+  EXPECT_EQ(j["unmatched"]["mos"]["first"], json::array({"s7"}));
+  EXPECT_DOUBLE_EQ(j["statistics"]["srocc"]["value"].get<double>(), -1.0);
+  EXPECT_NE(r.err.find("1 stimuli left out (empty or NaN score, MOS or CI): s4"), std::string::npos)
+      << r.err;
+}
+
+TEST_F(EvalCli, BadInputIsOneLineNamingTheFileAndColumn) {
+  const auto one_line_error = [](const CliRun& r) {
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(r.err.find("qm3d: error: "), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  };
+  const std::string s = basics_scores(), m = basics_mos();
+  CliRun r = qm3d("eval " + s + " " + m + " --mos-column quality");
+  one_line_error(r);
+  EXPECT_NE(
+      r.err.find("basics_mos.csv: no column \"quality\" (columns: stimulus, mos); set it with "
+                 "--mos-column"),
+      std::string::npos)
+      << r.err;
+  const fs::path bad = file("bad.csv", "stimulus,mos\np01_geocnn_r01,4.5\np01_geocnn_r02,good\n");
+  r = qm3d("eval " + s + " " + bad.string());
+  one_line_error(r);
+  EXPECT_NE(r.err.find("bad.csv:3: column \"mos\": \"good\" is not a number"), std::string::npos)
+      << r.err;
+  const fs::path other = file("other.csv", "stimulus,mos\nx,1\ny,2\n");
+  r = qm3d("eval " + s + " " + other.string());
+  one_line_error(r);
+  EXPECT_NE(r.err.find("no stimulus in common between"), std::string::npos) << r.err;
+  const fs::path three = file("three.csv", "a,b,c\nx,1,2\n");
+  r = qm3d("eval " + three.string() + " " + m);
+  one_line_error(r);
+  EXPECT_NE(r.err.find("three.csv: which column holds the values? set it with --scores-column"),
+            std::string::npos)
+      << r.err;
+  const fs::path twice = file("twice.csv", "stimulus,mos\nx,1\nx,2\n");
+  r = qm3d("eval " + s + " " + twice.string());
+  one_line_error(r);
+  EXPECT_NE(r.err.find("twice.csv:3: key \"x\" already on line 2"), std::string::npos) << r.err;
+  r = qm3d("eval /nonexistent/scores.csv " + m);
+  one_line_error(r);
+  EXPECT_NE(r.err.find("/nonexistent/scores.csv: no such file"), std::string::npos) << r.err;
+}
+
+TEST_F(EvalCli, SvgPlotAndPngThroughGnuplot) {
+  const fs::path svg = dir_ / "io" / "plot.svg";
+  const std::string args = "eval " + basics_scores() + " " + basics_mos() + " --bootstrap 0 -q";
+  ASSERT_EQ(qm3d(args + " --plot " + svg.string()).code, 0);
+  const std::string text = slurp(svg);
+  EXPECT_EQ(text.rfind("<?xml", 0), 0u);
+  EXPECT_NE(text.find("<polyline"), std::string::npos);
+  std::size_t circles = 0;
+  for (auto p = text.find("<circle"); p != std::string::npos; p = text.find("<circle", p + 1))
+    ++circles;
+  EXPECT_EQ(circles, 1140u);
+  // PNG: drawn by gnuplot when it is installed; a clear error when it is not.
+  const fs::path png = dir_ / "io" / "plot.png";
+  const CliRun none = qm3d(args + " --plot " + png.string(), "PATH=/nonexistent");
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("PNG plots are drawn by gnuplot, which is not installed"),
+            std::string::npos)
+      << none.err;
+  EXPECT_FALSE(fs::exists(png));
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot";
+  ASSERT_EQ(qm3d(args + " --plot " + png.string()).code, 0);
+  EXPECT_EQ(slurp(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_EQ(qm3d(args + " --plot " + (dir_ / "io" / "plot.gif").string()).code, 2);
+}
+
+// ---- train ---------------------------------------------------------------------------------
+
+// Features uniform in [0, 1) (f3 of a larger scale), MOS = decreasing logistic of `weights`.f
+// plus N(0, noise_sd); `groups` source models of `per_group` stimuli.
+struct SyntheticFiles {
+  std::string features, mos;
+};
+
+SyntheticFiles synthetic_csv(const FeatureVector& weights, const LogisticFunction& mapping,
+                             int groups, int per_group, double noise_sd, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::ostringstream features, mos;
+  features << "stimulus,source,f1,f2,f3,f4,f5,f6,f7,f8\n";
+  mos << "stimulus,mos\n";
+  for (int g = 0; g < groups; ++g) {
+    for (int i = 0; i < per_group; ++i) {
+      const std::string key = "m" + std::to_string(g) + "_d" + std::to_string(i);
+      features << key << ",model" << g;
+      double score = 0;
+      for (std::size_t k = 0; k < kNumFeatures; ++k) {
+        const double f = uniform01(rng) * (k == 2 ? 10 : 1);
+        features << "," << exact(f);
+        score += weights[k] * f;
+      }
+      features << "\n";
+      mos << key << "," << exact(mapping(score) + noise_sd * normal(rng)) << "\n";
+    }
+  }
+  return {features.str(), mos.str()};
+}
+
+TEST_F(EvalCli, TrainFindsTheTrueSubsetAndWritesAModel) {
+  const FeatureVector truth = {0, 0.2, 0, 0, 0.3, 0, 0.5, 0};
+  const SyntheticFiles data = synthetic_csv(truth, {1, 5, 0.5, 0.08}, 6, 40, 0.1, 1);
+  const fs::path features = file("features.csv", data.features), mos = file("mos.csv", data.mos);
+  const fs::path model = dir_ / "io" / "model.json", report = dir_ / "io" / "subsets.csv";
+  const CliRun r = qm3d("train " + features.string() + " " + mos.string() +
+                        " --group-by source --metric pcqm -o " + model.string() + " --report " +
+                        report.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("240 stimuli, features f of pcqm, 6 folds (source), 255 subsets"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("f2,f5,f7"), std::string::npos) << r.out;
+  const json m = json::parse(slurp(model));
+  EXPECT_EQ(m["format"], "qm3d-model/1");
+  EXPECT_EQ(m["metric"], "pcqm");
+  ASSERT_EQ(m["features"], json::array({"f2", "f5", "f7"}));
+  // Stated tolerance: every weight within 0.01 of the truth.
+  EXPECT_NEAR(m["weights"][0].get<double>(), 0.2, 0.01);
+  EXPECT_NEAR(m["weights"][1].get<double>(), 0.3, 0.01);
+  EXPECT_NEAR(m["weights"][2].get<double>(), 0.5, 0.01);
+  EXPECT_NE(m["provenance"].get<std::string>().find("leave-one-group-out"), std::string::npos);
+  EXPECT_TRUE(m.contains("logistic"));
+  const std::string rows = slurp(report);
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 256);
+  EXPECT_EQ(
+      rows.rfind("rank,subset,features,plcc_mean,plcc_sd,srocc_mean,srocc_sd,chosen,error\n", 0),
+      0u);
+  EXPECT_NE(rows.find(",\"f2,f5,f7\",3,"), std::string::npos) << rows.substr(0, 400);
+}
+
+TEST_F(EvalCli, TrainedBuiltInWeightsReproduceTheBuiltInScore) {
+  // Noise-free data generated with PCQM's own weights: training on f3,f4,f6 gives them back,
+  // and `qm3d pcqm --model` then scores as the built-in model does.
+  const SyntheticFiles data = synthetic_csv(pcqm_model().weights, {1, 5, 0.5, 0.1}, 4, 20, 0, 2);
+  const fs::path features = file("features.csv", data.features), mos = file("mos.csv", data.mos);
+  const fs::path model = dir_ / "io" / "model.json";
+  const CliRun t = qm3d("train " + features.string() + " " + mos.string() +
+                        " --group-by source --metric pcqm --subset f3,f4,f6 --final refit -q -o " +
+                        model.string());
+  ASSERT_EQ(t.code, 0) << t.err;
+  const json m = json::parse(slurp(model));
+  ASSERT_EQ(m["features"], json::array({"f3", "f4", "f6"}));
+  EXPECT_NEAR(m["weights"][0].get<double>(), 0.0057, 1e-7);
+  EXPECT_NEAR(m["weights"][1].get<double>(), 0.9771, 1e-7);
+  EXPECT_NEAR(m["weights"][2].get<double>(), 0.0172, 1e-7);
+  const std::string pair =
+      (test::source_dir() / "data" / "clouds" / "sphere_2k_ref.ply").string() + " " +
+      (test::source_dir() / "data" / "clouds" / "sphere_2k_cnoise10.ply").string();
+  const CliRun builtin = qm3d("pcqm " + pair + " --json -q");
+  const CliRun trained = qm3d("pcqm " + pair + " --model " + model.string() + " --json -q");
+  const CliRun file_model = qm3d("pcqm " + pair + " --json -q --model " +
+                                 (test::source_dir() / "data" / "models" / "pcqm.json").string());
+  ASSERT_EQ(builtin.code, 0) << builtin.err;
+  ASSERT_EQ(trained.code, 0) << trained.err;
+  ASSERT_EQ(file_model.code, 0) << file_model.err;
+  const double expected = json::parse(builtin.out)["score"].get<double>();
+  EXPECT_GT(expected, 0.0);
+  EXPECT_NEAR(json::parse(trained.out)["score"].get<double>(), expected, 1e-6 * expected);
+  // The built-in model file gives the built-in score exactly.
+  EXPECT_EQ(json::parse(file_model.out)["score"].get<double>(), expected);
+}
+
+TEST_F(EvalCli, CmdmModelFileAndMetricMismatch) {
+  const std::string pair = (test::source_dir() / "data" / "meshes" / "blob3_ref.off").string() +
+                           " " +
+                           (test::source_dir() / "data" / "meshes" / "blob3_colnoise.off").string();
+  const std::string models = (test::source_dir() / "data" / "models").string();
+  const CliRun builtin = qm3d("cmdm " + pair + " --json -q");
+  const CliRun file_model = qm3d("cmdm " + pair + " --json -q --model " + models + "/cmdm.json");
+  ASSERT_EQ(builtin.code, 0) << builtin.err;
+  ASSERT_EQ(file_model.code, 0) << file_model.err;
+  EXPECT_EQ(json::parse(file_model.out)["score"], json::parse(builtin.out)["score"]);
+  const CliRun wrong = qm3d("cmdm " + pair + " --model " + models + "/pcqm.json");
+  EXPECT_EQ(wrong.code, 2);
+  EXPECT_NE(wrong.err.find("pcqm.json: model file: it is a \"pcqm\" model, not a \"cmdm\" one"),
+            std::string::npos)
+      << wrong.err;
+  EXPECT_EQ(
+      qm3d("cmdm " + pair + " --model " + models + "/cmdm.json --weights 1,0,0,0,0,0,0,0").code,
+      1);  // usage error: one or the other
+}
+
+TEST_F(EvalCli, TrainReadsBatchResultsAndReportsItsErrors) {
+  // Batch-style results (both directions, metric column, paths) against names: --stem, the
+  // features of both directions averaged, the metric taken from the file.
+  const SyntheticFiles data =
+      synthetic_csv({0, 0, 0, 1, 0, 0, 0, 0}, {1, 5, 0.5, 0.1}, 3, 10, 0.05, 3);
+  std::istringstream in(data.features);
+  std::string line;
+  std::getline(in, line);
+  std::ostringstream batch;
+  batch << "reference,distorted,metric,score,status,error,seconds";
+  for (const char* d : {"dist_to_ref", "ref_to_dist"}) {
+    batch << "," << d << "_score," << d << "_bbox_max_side";
+    for (int k = 1; k <= 8; ++k) batch << "," << d << "_f" << k;
+  }
+  batch << "\n";
+  while (std::getline(in, line)) {
+    const std::string key = line.substr(0, line.find(','));
+    const std::string f = line.substr(line.find(',', line.find(',') + 1));  // ",f1,...,f8"
+    batch << "/refs/r.ply,/dist/" << key << ".ply,cmdm,0.1,ok,,1,0.1,1" << f << ",0.1,1" << f
+          << "\n";
+  }
+  const fs::path features = file("results.csv", batch.str());
+  const fs::path mos = file("mos.csv", data.mos + "extra,3\n");
+  const fs::path model = dir_ / "io" / "model.json";
+  const std::string args = "train " + features.string() + " " + mos.string();
+  const CliRun r = qm3d(args + " --group-by source --stem --subset f4 --subset f4,f5 --json -o " +
+                        model.string());
+  EXPECT_EQ(r.code, 2);  // "source" is in neither file
+  EXPECT_NE(r.err.find("--group-by: no column \"source\" in"), std::string::npos) << r.err;
+  const fs::path mos_groups = file(
+      "mos_groups.csv", "stimulus,mos,model\n" + [&] {
+        std::string out;
+        std::istringstream m(data.mos);
+        std::getline(m, line);
+        while (std::getline(m, line)) out += line + "," + line.substr(0, 2) + "\n";
+        return out;
+      }());
+  const CliRun ok =
+      qm3d("train " + features.string() + " " + mos_groups.string() +
+           " --group-by model --stem --subset f4 --subset f4,f5 --json -o " + model.string());
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  const json j = json::parse(ok.out);
+  EXPECT_EQ(j["features"]["prefixes"], json::array({"dist_to_ref_f", "ref_to_dist_f"}));
+  EXPECT_EQ(j["stimuli"], 30);
+  EXPECT_EQ(j["folds"].size(), 3u);
+  EXPECT_EQ(j["chosen"]["subset"], "f4");
+  EXPECT_EQ(j["subsets"].size(), 2u);
+  EXPECT_EQ(json::parse(slurp(model))["metric"], "cmdm");
+  const CliRun bad_prefix = qm3d("train " + features.string() + " " + mos_groups.string() +
+                                 " --group-by model --stem --features mos");
+  EXPECT_EQ(bad_prefix.code, 2);
+  EXPECT_NE(bad_prefix.err.find("results.csv: no column \"mos1\""), std::string::npos)
+      << bad_prefix.err;
+  const fs::path plain = file("plain.csv", data.features);
+  const CliRun no_metric =
+      qm3d("train " + plain.string() + " " + mos_groups.string() + " --group-by model --subset f4");
+  EXPECT_EQ(no_metric.code, 2);
+  EXPECT_NE(no_metric.err.find("plain.csv: no \"metric\" column; say which metric the model is "
+                               "for with --metric cmdm|pcqm"),
+            std::string::npos)
+      << no_metric.err;
+}
+
+}  // namespace
+}  // namespace qm3d

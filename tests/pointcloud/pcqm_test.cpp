@@ -1,0 +1,391 @@
+#include "qm3d/pointcloud/pcqm.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <sstream>
+
+#include "pcqm_internal.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/pooling.h"
+#include "reference_data.h"
+#include "test_paths.h"
+
+namespace qm3d::pointcloud {
+namespace {
+
+using test_data::cloud;
+using test_data::head;
+using test_data::reference_result;
+using test_data::reference_row;
+using test_data::ReferenceRow;
+
+// Tolerances of the task: PCQM within 1e-6 relative (1e-12 absolute for a reference below
+// 1e-12), the features and every per-point value within 1e-6 absolute.
+constexpr double kScoreRelTol = 1e-6;
+constexpr double kTinyScore = 1e-12;
+constexpr double kFeatureAbsTol = 1e-6;
+constexpr double kPerPointAbsTol = 1e-6;
+
+PcqmOptions test_options() {
+  PcqmOptions o;
+  o.data_dir = test::tables_dir();
+  return o;
+}
+
+void expect_score_near(double actual, double expected) {
+  if (std::abs(expected) < kTinyScore) {
+    EXPECT_NEAR(actual, expected, kTinyScore);
+  } else {
+    EXPECT_LE(std::abs(actual - expected), kScoreRelTol * std::abs(expected))
+        << "actual " << actual << " expected " << expected;
+  }
+}
+
+// ---- every row of pcqm_reference.csv ----
+
+class PcqmReferenceTest : public ::testing::TestWithParam<ReferenceRow> {};
+
+TEST_P(PcqmReferenceTest, MatchesReferenceImplementation) {
+  const ReferenceRow& row = GetParam();
+  const PcqmResult& r = reference_result(row);
+  expect_score_near(r.score, row.pcqm);
+  double max_feature_diff = 0;
+  for (std::size_t k = 0; k < kNumFeatures; ++k) {
+    EXPECT_NEAR(r.ref_to_dist.features[k], row.features[k], kFeatureAbsTol) << "F" << k + 1;
+    max_feature_diff =
+        std::max(max_feature_diff, std::abs(r.ref_to_dist.features[k] - row.features[k]));
+  }
+  std::cout << "[ pcqm     ] " << row.name << ": PCQM " << r.score << " (reference " << row.pcqm
+            << ", rel. diff " << std::abs(r.score - row.pcqm) / std::max(std::abs(row.pcqm), 1e-300)
+            << "), max |F diff| " << max_feature_diff << "\n";
+  EXPECT_FALSE(r.dist_to_ref.has_value());
+  EXPECT_TRUE(r.warnings.empty());
+  EXPECT_EQ(r.ref_to_dist.per_point.size(), cloud(row.reference).size());
+}
+
+std::string row_test_name(const ::testing::TestParamInfo<ReferenceRow>& info) {
+  std::string s = info.param.name;
+  for (char& c : s) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  }
+  return s;
+}
+
+INSTANTIATE_TEST_SUITE_P(AllRows, PcqmReferenceTest,
+                         ::testing::ValuesIn(test_data::reference_rows()), row_test_name);
+
+TEST(PcqmReferenceData, HasAllEighteenRows) { EXPECT_EQ(test_data::reference_rows().size(), 18u); }
+
+TEST(PcqmReferenceData, PerPointScoresAverageToTheScore) {
+  const PcqmResult& r = reference_result(reference_row("def_sphere_50k_gnoise0.005"));
+  EXPECT_NEAR(mean_pool(r.ref_to_dist.per_point), r.score, 1e-15);
+}
+
+// ---- per-point values against the reference's dumps (first 2000 points) ----
+
+// Column order of per_point/*_first2000.txt.
+enum Column {
+  kIndex,
+  kX,
+  kY,
+  kZ,
+  kProjX,
+  kProjY,
+  kProjZ,
+  kCurvR,
+  kCurvD,
+  kLR,
+  kAR,
+  kBR,
+  kLD,
+  kAD,
+  kBD,
+  kCR,
+  kCD,
+  kDH,
+  kNRadD,
+  kNRadR,
+  kNStat,
+  kGeomL,
+  kGeomC,
+  kGeomS,
+  kColL,
+  kColLc,
+  kColLs,
+  kColC,
+  kColH,
+  kNumColumns
+};
+
+std::vector<std::array<double, kNumColumns>> read_per_point(const std::string& case_name) {
+  std::ifstream in(test_data::pcqm_dir() / "per_point" / (case_name + "_first2000.txt"));
+  std::vector<std::array<double, kNumColumns>> rows;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::array<double, kNumColumns> r{};
+    for (double& v : r) s >> v;
+    if (s) rows.push_back(r);
+  }
+  return rows;
+}
+
+// Our value of each column for point i.
+std::array<double, kNumColumns> our_columns(const detail::DirectionOutput& out,
+                                            const ColoredCloud& ref, std::size_t i) {
+  const detail::PointDiagnostics& d = out.diagnostics;
+  const FeatureVector& f = out.features[i];
+  return {double(i),
+          ref.positions[i][0],
+          ref.positions[i][1],
+          ref.positions[i][2],
+          d.correspondence[i][0],
+          d.correspondence[i][1],
+          d.correspondence[i][2],
+          d.curvature_ref[i],
+          d.curvature_dist[i],
+          d.lab_ref[i].L,
+          d.lab_ref[i].a,
+          d.lab_ref[i].b,
+          d.lab_dist[i].L,
+          d.lab_dist[i].a,
+          d.lab_dist[i].b,
+          d.chroma_ref[i],
+          d.chroma_dist[i],
+          d.hue_difference[i],
+          double(d.count_radius_dist[i]),
+          double(d.count_radius_ref[i]),
+          double(d.count_statistics[i]),
+          f[0],
+          f[1],
+          f[2],
+          1 - f[3],
+          1 - f[4],
+          1 - f[5],
+          1 - f[6],
+          1 - f[7]};
+}
+
+class PcqmPerPointTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(PcqmPerPointTest, FirstPointsMatchReferenceDump) {
+  const ReferenceRow& row = reference_row(GetParam());
+  const auto expected = read_per_point(row.name);
+  ASSERT_EQ(expected.size(), 2000u);
+  const ColoredCloud& ref = cloud(row.reference);
+  const PcqmOptions o = test_data::options_for(row);
+  detail::DirectionParams params;
+  params.max_dim = detail::reference_max_dim(ref.positions);
+  params.radius_rel = o.radius_rel;
+  params.radius_factor = o.radius_factor;
+  params.knn = std::size_t(o.knn);
+  params.diagnostics = true;
+  const auto table = Lab2000hlTable::shared(test::tables_dir());
+  const detail::DirectionOutput out =
+      detail::compute_direction(ref, cloud(row.distorted), params, *table);
+
+  std::array<double, kNumColumns> max_diff{};
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const auto ours = our_columns(out, ref, i);
+    for (int c = 0; c < kNumColumns; ++c) {
+      const double diff = std::abs(ours[c] - expected[i][c]);
+      max_diff[c] = std::max(max_diff[c], diff);
+      EXPECT_LE(diff, kPerPointAbsTol) << row.name << " point " << i << " column " << c << ": ours "
+                                       << ours[c] << " reference " << expected[i][c];
+    }
+  }
+  std::cout << "[ per-point] " << row.name << " max |diff| per column:";
+  for (double m : max_diff) std::cout << " " << m;
+  std::cout << "\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(Dumps, PcqmPerPointTest,
+                         ::testing::Values("def_sphere_50k_cnoise10", "r02_sphere_50k_gnoise0.005"),
+                         [](const auto& info) {
+                           std::string s = info.param;
+                           std::replace(s.begin(), s.end(), '.', '_');
+                           return s;
+                         });
+
+// ---- properties ----
+
+TEST(Pcqm, OneAndTwoThreadsGiveIdenticalBits) {
+  const ReferenceRow& row = reference_row("def_sphere_50k_gnoise0.005");
+  PcqmOptions o = test_data::options_for(row);
+  o.threads = 1;
+  const PcqmResult one = compute_pcqm(cloud(row.reference), cloud(row.distorted), o);
+  o.threads = 2;
+  const PcqmResult two = compute_pcqm(cloud(row.reference), cloud(row.distorted), o);
+  EXPECT_EQ(one.score, two.score);
+  EXPECT_EQ(one.ref_to_dist.features, two.ref_to_dist.features);
+  EXPECT_EQ(one.ref_to_dist.per_point, two.ref_to_dist.per_point);
+}
+
+TEST(Pcqm, IdentityGivesZero) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
+  const PcqmResult r = compute_pcqm(ref, ref, test_options());
+  EXPECT_NEAR(r.score, 0.0, kTinyScore);
+  for (double f : r.ref_to_dist.features) EXPECT_NEAR(f, 0.0, kTinyScore);
+  for (double v : r.ref_to_dist.per_point) EXPECT_NEAR(v, 0.0, kTinyScore);
+}
+
+TEST(Pcqm, StrongerColourNoiseScoresHigher) {
+  const PcqmResult& weak = reference_result(reference_row("def_sphere_50k_cnoise10"));
+  const PcqmResult& strong = reference_result(reference_row("def_sphere_50k_cnoise30"));
+  EXPECT_LT(weak.score, strong.score);
+}
+
+ColoredCloud translated(ColoredCloud c, const Vec3& t) {
+  for (Vec3& p : c.positions) {
+    for (int a = 0; a < 3; ++a) p[a] += t[a];
+  }
+  return c;
+}
+
+TEST(Pcqm, ReferenceBoxDependsOnTranslationAndWarns) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
+  const ColoredCloud dist = head(cloud("sphere_50k_cnoise10.ply"), 5000);
+  const PcqmResult centred = compute_pcqm(ref, dist, test_options());
+  EXPECT_TRUE(centred.warnings.empty());
+  const Vec3 shift{10, 0, 0};
+  const PcqmResult shifted =
+      compute_pcqm(translated(ref, shift), translated(dist, shift), test_options());
+  // |min x| + |max x| = 9 + 11 = 20 instead of 2 (SPEC-PCQM 1.3).
+  EXPECT_NEAR(shifted.ref_to_dist.bbox_max_side, 20.0, 1e-3);
+  EXPECT_GT(std::abs(shifted.score - centred.score), 0.1 * centred.score);
+  ASSERT_EQ(shifted.warnings.size(), 1u);
+  EXPECT_NE(shifted.warnings[0].find("longest side"), std::string::npos) << shifted.warnings[0];
+}
+
+TEST(Pcqm, ExtentBoxIsTranslationInvariant) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
+  const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 5000);
+  PcqmOptions o = test_options();
+  o.bbox = BboxMode::kExtent;
+  const PcqmResult centred = compute_pcqm(ref, dist, o);
+  const Vec3 shift{10, -3, 0.5};
+  const PcqmResult shifted = compute_pcqm(translated(ref, shift), translated(dist, shift), o);
+  EXPECT_TRUE(shifted.warnings.empty());
+  EXPECT_DOUBLE_EQ(shifted.ref_to_dist.bbox_max_side, centred.ref_to_dist.bbox_max_side);
+  expect_score_near(shifted.score, centred.score);
+}
+
+TEST(Pcqm, ReferenceBoxQuirkOnNegativeAxis) {
+  // max starts at DBL_MIN, so an all-negative axis spans |min| + 2.2e-308.
+  const std::vector<Vec3> p{{-1, -2, -3}, {-2, -1, -1}};
+  EXPECT_EQ(detail::reference_max_dim(p), 3.0 + DBL_MIN);
+  const std::vector<Vec3> straddling{{-1, 0.5, 2}, {1.5, -0.5, 3}};
+  EXPECT_EQ(detail::reference_max_dim(straddling), 5.0);  // z: 2 + 3
+}
+
+TEST(Pcqm, SymmetricIsTheMeanOfBothDirections) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
+  const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 5000);
+  PcqmOptions o = test_options();
+  const PcqmResult forward = compute_pcqm(ref, dist, o);
+  const PcqmResult backward = compute_pcqm(dist, ref, o);
+  o.symmetric = true;
+  const PcqmResult both = compute_pcqm(ref, dist, o);
+  ASSERT_TRUE(both.dist_to_ref.has_value());
+  EXPECT_EQ(both.ref_to_dist.score, forward.score);
+  EXPECT_EQ(both.dist_to_ref->score, backward.score);
+  EXPECT_EQ(both.dist_to_ref->per_point, backward.ref_to_dist.per_point);
+  EXPECT_EQ(both.score, 0.5 * (forward.score + backward.score));
+  EXPECT_NE(forward.score, backward.score);
+}
+
+TEST(Pcqm, KnnLargerThanTheCloudUsesEveryPoint) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 8);
+  const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 8);
+  PcqmOptions o = test_options();
+  o.knn = 20;
+  const PcqmResult big_k = compute_pcqm(ref, dist, o);
+  o.knn = 8;
+  const PcqmResult all = compute_pcqm(ref, dist, o);
+  EXPECT_TRUE(std::isfinite(big_k.score));
+  EXPECT_EQ(big_k.score, all.score);
+}
+
+TEST(Pcqm, PerPointCanBeSkipped) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 2000);
+  PcqmOptions o = test_options();
+  o.per_point = false;
+  EXPECT_TRUE(compute_pcqm(ref, ref, o).ref_to_dist.per_point.empty());
+}
+
+// ---- errors ----
+
+template <typename E>
+void expect_error_mentioning(const std::function<void()>& f, const std::string& text) {
+  try {
+    f();
+    ADD_FAILURE() << "no exception";
+  } catch (const E& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
+TEST(PcqmErrors, EmptyCloudsAreNamed) {
+  const ColoredCloud some = head(cloud("sphere_50k_ref.ply"), 100);
+  expect_error_mentioning<NumericError>([&] { compute_pcqm({}, some, test_options()); },
+                                        "reference cloud is empty");
+  expect_error_mentioning<NumericError>([&] { compute_pcqm(some, {}, test_options()); },
+                                        "distorted cloud is empty");
+}
+
+TEST(PcqmErrors, ZeroSizeBoxIsRejected) {
+  ColoredCloud same{{{1, 2, 3}, {1, 2, 3}}, {{0.5, 0.5, 0.5}, {0.1, 0.2, 0.3}}};
+  const ColoredCloud some = head(cloud("sphere_50k_ref.ply"), 100);
+  expect_error_mentioning<NumericError>([&] { compute_pcqm(same, some, test_options()); },
+                                        "reference cloud's bounding box has zero size");
+  PcqmOptions o = test_options();
+  o.symmetric = true;
+  expect_error_mentioning<NumericError>([&] { compute_pcqm(some, same, o); },
+                                        "distorted cloud's bounding box has zero size");
+}
+
+TEST(PcqmErrors, BadCloudsAreRejected) {
+  ColoredCloud c = head(cloud("sphere_50k_ref.ply"), 100);
+  c.colors.pop_back();
+  expect_error_mentioning<NumericError>([&] { compute_pcqm(c, c, test_options()); },
+                                        "100 points but 99 colours");
+  const ColoredCloud clean = head(cloud("sphere_50k_ref.ply"), 100);
+  c = clean;
+  c.positions[7][1] = std::nan("");
+  expect_error_mentioning<NumericError>([&] { compute_pcqm(clean, c, test_options()); },
+                                        "point 7 of the distorted cloud");
+}
+
+TEST(PcqmErrors, BadOptionsAreRejected) {
+  const ColoredCloud c = head(cloud("sphere_50k_ref.ply"), 100);
+  auto with = [&](auto change) {
+    PcqmOptions o = test_options();
+    change(o);
+    return [o, &c] { compute_pcqm(c, c, o); };
+  };
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_rel = 0; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_rel = -0.1; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_rel = INFINITY; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.knn = 0; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_factor = 0; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.threads = -1; })(), std::invalid_argument);
+  expect_error_mentioning<std::invalid_argument>(with([](PcqmOptions& o) { o.knn = -3; }),
+                                                 "knn must be at least 1, got -3");
+}
+
+TEST(PcqmErrors, MissingTablesAreAnInputError) {
+  const ColoredCloud c = head(cloud("sphere_50k_ref.ply"), 100);
+  PcqmOptions o = test_options();
+  o.data_dir = "/nonexistent/qm3d/tables";
+  EXPECT_THROW(compute_pcqm(c, c, o), InputError);
+}
+
+}  // namespace
+}  // namespace qm3d::pointcloud
