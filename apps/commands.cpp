@@ -1,6 +1,7 @@
 #include "commands.h"
 
 #include <chrono>
+#include <future>
 
 #include "distortion_map.h"
 #include "qm3d/common/color.h"
@@ -120,8 +121,11 @@ MetricReport run_mesh_metric(const char* metric, const std::filesystem::path& re
                              bool require_colors, const std::filesystem::path& map,
                              const Compute& compute) {
   const auto start = std::chrono::steady_clock::now();
-  const mesh::MeshFile ref = mesh::read_mesh(reference, {require_colors});
+  // The two files are read concurrently.
+  auto ref_task = std::async(std::launch::async,
+                             [&] { return mesh::read_mesh(reference, {require_colors}); });
   const mesh::MeshFile dist = mesh::read_mesh(distorted, {require_colors});
+  const mesh::MeshFile ref = ref_task.get();
   const mesh::MeshMetricResult r = naming_inputs(
       reference, distorted, [&] { return compute(ref.mesh, dist.mesh, !map.empty()); });
   MetricReport report = new_report(metric, reference, distorted, std::move(options), r.score);
@@ -162,8 +166,9 @@ MetricReport run_msdm2(const std::filesystem::path& reference,
 MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
                       const pointcloud::PcqmOptions& options, const std::filesystem::path& map) {
   const auto start = std::chrono::steady_clock::now();
-  const ColoredCloud ref = load_cloud(reference);
+  auto ref_task = std::async(std::launch::async, [&] { return load_cloud(reference); });
   const ColoredCloud dist = load_cloud(distorted);
+  const ColoredCloud ref = ref_task.get();
   pointcloud::PcqmOptions o = options;
   o.per_point = !map.empty();
   const pointcloud::PcqmResult r =

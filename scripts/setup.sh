@@ -19,7 +19,7 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
-  python3 python3-numpy
+  python3 python3-numpy time
   gnuplot-nox
 )
 

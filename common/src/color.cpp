@@ -1,6 +1,8 @@
 #include "qm3d/common/color.h"
 
 #include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -11,6 +13,7 @@
 #include <system_error>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 
 #ifndef QM3D_DEFAULT_DATA_DIR
 #define QM3D_DEFAULT_DATA_DIR ""
@@ -40,38 +43,39 @@ double lab_f(double t) {
 
 // Reads exactly `expected` numbers, one per line, from `path`.
 std::vector<double> read_table_file(const std::filesystem::path& path, std::size_t expected) {
-  std::ifstream in(path);
-  if (!in) {
+  std::string text;
+  try {
+    text = read_file_bytes(path, std::uintmax_t(64) << 20);
+  } catch (const InputError& e) {
     throw InputError("LAB2000HL table " + path.string() +
                      ": cannot open (set --data-dir or QM3D_DATA_DIR to the directory holding "
                      "L_data.txt and RegularGrid*.txt)");
   }
   std::vector<double> values;
   values.reserve(expected);
-  std::string line;
   std::size_t line_no = 0;
-  while (std::getline(in, line)) {
+  for (std::size_t pos = 0; pos < text.size();) {
+    const std::size_t eol = std::min(text.find('\n', pos), text.size());
     ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos) continue;  // blank lines (e.g. a trailing one) are fine
+    std::size_t begin = pos, end = eol;
+    pos = eol + 1;
+    while (begin < end && std::isspace(static_cast<unsigned char>(text[begin]))) ++begin;
+    while (end > begin && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+    if (begin == end) continue;  // blank lines (e.g. a trailing one) are fine
     if (values.size() == expected) {
       throw FormatError("LAB2000HL table " + path.string() + ": more than " +
                         std::to_string(expected) + " values (line " + std::to_string(line_no) +
                         ")");
     }
-    const char* begin = line.c_str() + first;
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(begin, &end);
-    const bool rest_blank =
-        end != begin && std::string(end).find_first_not_of(" \t\r") == std::string::npos;
-    if (!rest_blank || errno == ERANGE || !std::isfinite(v)) {
+    double v = 0;
+    if (text[begin] == '+') ++begin;
+    const auto res = std::from_chars(text.data() + begin, text.data() + end, v);
+    if (res.ec != std::errc() || res.ptr != text.data() + end || !std::isfinite(v)) {
       throw FormatError("LAB2000HL table " + path.string() + ": line " + std::to_string(line_no) +
-                        " is not a number: '" + line + "'");
+                        " is not a number: '" + text.substr(begin, end - begin) + "'");
     }
     values.push_back(v);
   }
-  if (in.bad()) throw InputError("LAB2000HL table " + path.string() + ": read error");
   if (values.size() != expected) {
     throw FormatError("LAB2000HL table " + path.string() + ": expected " +
                       std::to_string(expected) + " values, found " + std::to_string(values.size()));

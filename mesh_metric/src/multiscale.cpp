@@ -3,6 +3,7 @@
 #include <cmath>
 #include <deque>
 #include <future>
+#include <optional>
 #include <stdexcept>
 
 #include "halfedge_mesh.h"
@@ -11,6 +12,10 @@
 
 namespace qm3d::mesh::detail {
 namespace {
+
+// Up to this many faces (both meshes together) the two directions' AABB trees are built and
+// queried concurrently (~200 B per face at the peak).
+constexpr std::size_t kConcurrentMatchFaces = 1000000;
 
 // A mesh ready for the metric, with what both directions need of it.
 struct PreparedMesh {
@@ -121,8 +126,8 @@ void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
 std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const PreparedMesh& second,
                                           const MultiscaleDefinition& def, int scales,
-                                          CurvatureCache& curvatures) {
-  auto [matched_point, matches] = match_to_surface(first.mesh.positions, second.mesh, def.anchor);
+                                          CurvatureCache& curvatures, SurfaceMatches matching) {
+  const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
   if (def.uses_color) lab_match = interpolate_colors(matches, second.mesh, second.lab);
   const double maxdim = first.bbox_max_side;
@@ -143,12 +148,19 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const Prepa
   return sums;
 }
 
+SurfaceMatches match(const PreparedMesh& first, const PreparedMesh& second,
+                     const MultiscaleDefinition& def) {
+  return match_to_surface(first.mesh.positions, second.mesh, def.anchor);
+}
+
 DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& second,
                               const MultiscaleDefinition& def, int scales,
-                              CurvatureCache& curvatures, const DirectionPooling& pool) {
+                              CurvatureCache& curvatures, const DirectionPooling& pool,
+                              std::optional<SurfaceMatches> matching) {
   DirectionResult result;
   result.bbox_max_side = first.bbox_max_side;
-  auto sums = direction_sums(first, second, def, scales, curvatures);
+  auto sums = direction_sums(first, second, def, scales, curvatures,
+                             matching ? std::move(*matching) : match(first, second, def));
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
   if (result.local_distortion.size() > first.input_vertices) {
@@ -178,11 +190,22 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
   }
   const bool both = run.direction == Direction::kSymmetric;
   CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side);
+  // Closest-point matching builds one AABB tree per direction, sequentially inside CGAL. When
+  // both directions are needed and the trees are small, both are matched concurrently up front;
+  // large meshes are matched one direction at a time to keep the memory peak low.
+  std::optional<SurfaceMatches> d2r_matches, r2d_matches;
+  if (both && ref.mesh.triangles.size() + dist.mesh.triangles.size() <= kConcurrentMatchFaces) {
+    auto r2d = std::async(std::launch::async, [&] { return match(ref, dist, def); });
+    d2r_matches = match(dist, ref, def);
+    r2d_matches = r2d.get();
+  }
   if (run.direction != Direction::kRefToDist) {
-    result.dist_to_ref = run_direction(dist, ref, def, run.scales, curvatures, pool);
+    result.dist_to_ref =
+        run_direction(dist, ref, def, run.scales, curvatures, pool, std::move(d2r_matches));
   }
   if (run.direction != Direction::kDistToRef) {
-    result.ref_to_dist = run_direction(ref, dist, def, run.scales, curvatures, pool);
+    result.ref_to_dist =
+        run_direction(ref, dist, def, run.scales, curvatures, pool, std::move(r2d_matches));
   }
   result.score = both ? (result.dist_to_ref->score + result.ref_to_dist->score) / 2
                       : (result.dist_to_ref ? result.dist_to_ref->score : result.ref_to_dist->score);
