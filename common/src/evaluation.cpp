@@ -12,6 +12,8 @@
 
 #include "least_squares.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/pooling.h"
+#include "qm3d/common/statistics.h"
 
 namespace qm3d {
 namespace {
@@ -28,19 +30,6 @@ void check_same_length(std::size_t a, std::size_t b, const char* what) {
     throw std::invalid_argument(std::string(what) + ": lengths differ (" + std::to_string(a) +
                                 " vs " + std::to_string(b) + ")");
   }
-}
-
-double mean_of(const std::vector<double>& v) {
-  double sum = 0;
-  for (double x : v) sum += x;
-  return sum / static_cast<double>(v.size());
-}
-
-// Population standard deviation around `mean`.
-double sd_of(const std::vector<double>& v, double mean) {
-  double sum = 0;
-  for (double x : v) sum += (x - mean) * (x - mean);
-  return std::sqrt(sum / static_cast<double>(v.size()));
 }
 
 double median_of(std::vector<double> v) {
@@ -101,8 +90,8 @@ struct Standardised {
 
 Standardised standardise(const std::vector<double>& v, const char* what) {
   Standardised s;
-  s.mean = mean_of(v);
-  s.sd = sd_of(v, s.mean);
+  s.mean = mean_pool(v);
+  s.sd = population_sd(v, s.mean);
   if (!(s.sd > 0)) throw NumericError(std::string("logistic fit: the ") + what + " are constant");
   s.values.reserve(v.size());
   for (double x : v) s.values.push_back((x - s.mean) / s.sd);
@@ -319,7 +308,7 @@ void check_evaluation_input(const std::vector<double>& scores, const std::vector
 double pearson(const std::vector<double>& x, const std::vector<double>& y) {
   check_same_length(x.size(), y.size(), "pearson");
   if (x.size() < 2) return kNaN;
-  const double mx = mean_of(x), my = mean_of(y);
+  const double mx = mean_pool(x), my = mean_pool(y);
   double sxx = 0, syy = 0, sxy = 0;
   for (std::size_t i = 0; i < x.size(); ++i) {
     sxx += (x[i] - mx) * (x[i] - mx);

@@ -10,6 +10,12 @@ double gaussian_weight(double distance, double sigma) {
          std::exp(-(distance * distance) / 2.0 / sigma / sigma);
 }
 
+double population_sd(const std::vector<double>& x, double mean) {
+  double sum = 0;
+  for (double v : x) sum += (v - mean) * (v - mean);
+  return std::sqrt(sum / static_cast<double>(x.size()));
+}
+
 double weighted_mean(const std::vector<double>& x, const std::vector<double>& w) {
   double sum_w = 0;
   double sum_wx = 0;

@@ -10,6 +10,8 @@
 
 #include "least_squares.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/pooling.h"
+#include "qm3d/common/statistics.h"
 #include "qm3d/common/model_io.h"
 
 namespace qm3d {
@@ -31,18 +33,6 @@ std::vector<std::size_t> subset_indices(FeatureMask subset) {
   return cols;
 }
 
-double mean_of(const std::vector<double>& v) {
-  double sum = 0;
-  for (double x : v) sum += x;
-  return sum / static_cast<double>(v.size());
-}
-
-double sd_of(const std::vector<double>& v, double mean) {
-  double sum = 0;
-  for (double x : v) sum += (x - mean) * (x - mean);
-  return std::sqrt(sum / static_cast<double>(v.size()));
-}
-
 // The subset's features, each column standardised (z-scores), and the standardised MOS.
 struct Standardised {
   Eigen::MatrixXd z;  // #n by #subset
@@ -59,14 +49,14 @@ Standardised standardise(const std::vector<FeatureVector>& features, const std::
   for (std::size_t c = 0; c < cols.size(); ++c) {
     std::vector<double> column;
     for (const FeatureVector& f : features) column.push_back(f[cols[c]]);
-    const double mean = mean_of(column), sd = sd_of(column, mean);
+    const double mean = mean_pool(column), sd = population_sd(column, mean);
     if (!(sd > 0)) throw NumericError("feature " + feature_name(cols[c]) + " is constant");
     for (Eigen::Index i = 0; i < n; ++i) s.z(i, c) = (column[i] - mean) / sd;
     s.feature_mean.push_back(mean);
     s.feature_sd.push_back(sd);
   }
-  s.y_mean = mean_of(mos);
-  s.y_sd = sd_of(mos, s.y_mean);
+  s.y_mean = mean_pool(mos);
+  s.y_sd = population_sd(mos, s.y_mean);
   if (!(s.y_sd > 0)) throw NumericError("the subjective scores are constant");
   for (double m : mos) s.y.push_back((m - s.y_mean) / s.y_sd);
   return s;
@@ -215,7 +205,7 @@ FoldResult run_fold(const TrainingSet& data, const Fold& fold, FeatureMask subse
 }
 
 std::pair<double, double> mean_and_sd(const std::vector<double>& v) {
-  const double mean = mean_of(v);
+  const double mean = mean_pool(v);
   if (v.size() < 2) return {mean, 0.0};
   double sum = 0;
   for (double x : v) sum += (x - mean) * (x - mean);

@@ -23,33 +23,20 @@ void add_edge_tensor(double tensor[3][3], const Vec3& vec, double coeff) {
 // Accumulates the curvature tensor of vertex v0 within the ball of radius r.
 void vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, CurvatureVariant variant,
                    WalkScratch& scratch, double tensor[3][3]) {
-  const VertexRings& rings = m.rings;
   const Vec3& o = m.positions[v0];
-  scratch.start(m.positions.size());
-  scratch.visit(v0);
-  scratch.stack.push_back(v0);
-  while (!scratch.stack.empty()) {
-    const std::uint32_t v = scratch.stack.back();
-    scratch.stack.pop_back();
-    const Vec3& p = m.positions[v];
-    const Vec3 p_minus_o = sub(p, o);
-    for (std::uint32_t k = rings.begin(v); k < rings.end(v); ++k) {
-      const std::uint32_t w = rings.source[k];
-      Vec3 vec = sub(m.positions[w], p);
-      const double along = dot(vec, p_minus_o);
-      const bool outward = variant == CurvatureVariant::kCmdm ? along >= 0.0 : along > 0.0;
-      if (v != v0 && !outward) continue;
-      const bool isect = sphere_clip_vector(o, r, p, vec);
-      // Border edges and edges of a collapsed face carry a NaN angle and never contribute.
-      const double beta = rings.dihedral[k];
-      const bool contributes = variant == CurvatureVariant::kCmdm ? isect : true;
-      if (contributes && !std::isnan(beta)) {
-        const double len = norm(vec);
-        if (len > 0) add_edge_tensor(tensor, vec, beta / len);
-      }
-      if (!isect && scratch.visit(w)) scratch.stack.push_back(w);
+  const bool strict = variant == CurvatureVariant::kGeneric;
+  walk_outward(m, v0, strict, scratch, [&](std::uint32_t v, std::uint32_t k, std::uint32_t w,
+                                           Vec3 vec) {
+    const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
+    // Border edges and edges of a collapsed face carry a NaN angle and never contribute.
+    const double beta = m.rings.dihedral[k];
+    const bool contributes = variant == CurvatureVariant::kCmdm ? isect : true;
+    if (contributes && !std::isnan(beta)) {
+      const double len = norm(vec);
+      if (len > 0) add_edge_tensor(tensor, vec, beta / len);
     }
-  }
+    if (!isect) scratch.enter(w);
+  });
   const double area = kPi * r * r;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) tensor[i][j] /= area;

@@ -94,28 +94,15 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
   const Vec3& q0 = (*f.matched_point)[v0];
   out.clear();
   push_sample(vertex_sample(f, v0), o, q0, walk.sigma, with_color, out);
-  scratch.start(m.positions.size());
-  scratch.visit(v0);
-  scratch.stack.push_back(v0);
-  while (!scratch.stack.empty()) {
-    const std::uint32_t v = scratch.stack.back();
-    scratch.stack.pop_back();
-    const Vec3& p = m.positions[v];
-    const Vec3 p_minus_o = sub(p, o);
-    for (std::uint32_t k = m.rings.begin(v); k < m.rings.end(v); ++k) {
-      const std::uint32_t w = m.rings.source[k];
-      Vec3 vec = sub(m.positions[w], p);
-      const double along = dot(vec, p_minus_o);
-      if (v != v0 && !(walk.strict_outward_test ? along > 0.0 : along >= 0.0)) continue;
-      const double len_old = norm(vec);
-      const bool isect = sphere_clip_vector_cmdm(o, walk.radius, p, vec);
-      if (!isect && !scratch.visit(w)) continue;  // inside and already sampled
-      if (!isect) scratch.stack.push_back(w);
-      const Sample s = (len_old != 0 && isect) ? crossing_sample(f, v, w, vec, len_old)
-                                               : vertex_sample(f, w);
-      push_sample(s, o, q0, walk.sigma, with_color, out);
-    }
-  }
+  walk_outward(m, v0, walk.strict_outward_test, scratch,
+               [&](std::uint32_t v, std::uint32_t, std::uint32_t w, Vec3 vec) {
+                 const double len_old = norm(vec);
+                 const bool isect = sphere_clip_vector_cmdm(o, walk.radius, m.positions[v], vec);
+                 if (!isect && !scratch.enter(w)) return;  // inside and already sampled
+                 const Sample s = (len_old != 0 && isect) ? crossing_sample(f, v, w, vec, len_old)
+                                                          : vertex_sample(f, w);
+                 push_sample(s, o, q0, walk.sigma, with_color, out);
+               });
 }
 
 }  // namespace qm3d::mesh::detail

@@ -5,12 +5,14 @@
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <sstream>
+#include <vector>
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/ply.h"
@@ -105,35 +107,72 @@ const pcl::PCLPointField& colour_field(const pcl::PCLPointCloud2& cloud,
 
 // PCL's PCDReader::read crashes on a file without FIELDS (it only logs "No points to read"), so
 // the header is read and checked first.
-pcl::PCLPointCloud2 read_pcd_header(const std::filesystem::path& path, pcl::PCDReader& reader,
-                                    int& binary, unsigned int& data_offset) {
+pcl::PCLPointCloud2 read_pcd_header(const std::filesystem::path& path, pcl::PCDReader& reader) {
   pcl::PCLPointCloud2 header;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;
-  int version = 0;
-  if (reader.readHeader(path.string(), header, origin, orientation, version, binary,
-                        data_offset) < 0 ||
-      header.fields.empty()) {
+  int version = 0, binary = 0;
+  unsigned int data_offset = 0;
+  int status = -1;
+  try {  // PCL throws on some malformed headers (e.g. a field count of 0)
+    status = reader.readHeader(path.string(), header, origin, orientation, version, binary,
+                               data_offset);
+  } catch (const std::exception& e) {
+    throw FormatError(path.string() + ": not a valid PCD header (" + e.what() + ")");
+  }
+  if (status < 0 || header.fields.empty()) {
     throw FormatError(path.string() + ": not a PCD file (no valid header with FIELDS)");
   }
   return header;
 }
 
-// PCL allocates the whole point array from the header's counts before reading: refuse counts the
-// file cannot hold (binary: exact size; compressed: LZF expands at most ~1:64 here; ASCII: at
-// least two characters per value).
-void check_pcd_size(const std::filesystem::path& path, const pcl::PCLPointCloud2& header,
-                    int binary, unsigned int data_offset) {
+// Numbers of a PCD header line (non-numbers count as 0).
+std::vector<std::uintmax_t> header_numbers(std::istringstream& words) {
+  std::vector<std::uintmax_t> numbers;
+  for (std::string w; words >> w;) {
+    const bool digits = !w.empty() && w.size() < 19 &&
+                        std::all_of(w.begin(), w.end(), [](unsigned char c) { return std::isdigit(c); });
+    numbers.push_back(digits ? std::stoull(w) : 0);
+  }
+  return numbers;
+}
+
+// PCL allocates the whole point array from the header's counts, already while reading the
+// header: the counts are checked against the file size first, on our own reading of the header
+// (binary: exact size; binary_compressed: LZF expands at most ~1:64 here; ASCII: at least two
+// characters per value).
+void check_pcd_size(const std::filesystem::path& path) {
   const std::uintmax_t file_size = std::filesystem::file_size(path);
-  const std::uintmax_t body = file_size > data_offset ? file_size - data_offset : 0;
-  const std::uintmax_t points = std::uintmax_t(header.width) * header.height;
-  std::uintmax_t values_per_point = 0;
-  for (const auto& f : header.fields) values_per_point += std::max<std::uint32_t>(f.count, 1);
-  const bool compressed = binary == 2;
-  const std::uintmax_t needed = binary == 0 ? points * 2 * values_per_point
-                                : compressed ? points * header.point_step / 64
-                                             : points * header.point_step;
-  if (needed > body + 64) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line, key, data;
+  std::uintmax_t points = 0, offset = 0;
+  std::vector<std::uintmax_t> sizes, counts;
+  while (data.empty() && offset < (1u << 16) && std::getline(in, line)) {
+    offset += line.size() + 1;
+    std::istringstream words(line);
+    words >> key;
+    if (key == "DATA") {
+      words >> data;
+    } else if (key == "POINTS" || key == "SIZE" || key == "COUNT") {
+      const auto numbers = header_numbers(words);
+      if (key == "POINTS" && !numbers.empty()) points = numbers[0];
+      if (key == "SIZE") sizes = numbers;
+      if (key == "COUNT") counts = numbers;
+    }
+  }
+  std::uintmax_t values = 0, point_step = 0;
+  for (std::size_t f = 0; f < sizes.size(); ++f) {
+    const std::uintmax_t count = f < counts.size() ? std::max<std::uintmax_t>(counts[f], 1) : 1;
+    values += count;
+    point_step += std::min<std::uintmax_t>(sizes[f], 8) * count;
+  }
+  const std::uintmax_t body = file_size > offset ? file_size - offset : 0;
+  const std::uintmax_t per_point = data == "ascii" ? 2 * std::max<std::uintmax_t>(values, 1)
+                                   : data == "binary_compressed" ? 0
+                                                                 : std::max<std::uintmax_t>(point_step, 1);
+  const bool too_many = per_point > 0 ? points > (body + 64) / per_point
+                                      : points * std::max<std::uintmax_t>(point_step, 1) > 64 * (body + 64);
+  if (too_many) {
     throw FormatError(path.string() + ": PCD header declares " + std::to_string(points) +
                       " points but the file is too short to hold them");
   }
@@ -143,17 +182,21 @@ ColoredCloud read_pcd(const std::filesystem::path& path) {
   require_readable(path);
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are ours, one line each
   pcl::PCDReader reader;
-  int binary = 0;
-  unsigned int data_offset = 0;
-  pcl::PCLPointCloud2 cloud = read_pcd_header(path, reader, binary, data_offset);
-  check_pcd_size(path, cloud, binary, data_offset);
+  check_pcd_size(path);
+  pcl::PCLPointCloud2 cloud = read_pcd_header(path, reader);
   // Check the fields on the header before reading any data.
   coordinate_field(cloud, path, "x");
   coordinate_field(cloud, path, "y");
   coordinate_field(cloud, path, "z");
   colour_field(cloud, path);
   if (std::size_t(cloud.width) * cloud.height == 0) return ColoredCloud{};
-  if (reader.read(path.string(), cloud) < 0) {
+  int status = -1;
+  try {
+    status = reader.read(path.string(), cloud);
+  } catch (const std::exception& e) {
+    throw FormatError(path.string() + ": PCD data cannot be read (" + e.what() + ")");
+  }
+  if (status < 0) {
     throw FormatError(path.string() + ": PCD data cannot be read (truncated or malformed)");
   }
   const std::size_t n = std::size_t(cloud.width) * cloud.height;

@@ -19,24 +19,15 @@
 #include "qm3d/common/ply.h"
 #include "qm3d/mesh/cmdm.h"
 #include "qm3d/mesh/mesh_io.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace qm3d {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::CliRun;
+using test::slurp;
 
 class Cli : public ::testing::Test {
  protected:
@@ -51,11 +42,7 @@ class Cli : public ::testing::Test {
 
   // Runs qm3d with `args` in an empty working directory (checked to stay empty).
   CliRun qm3d(const std::string& args, bool expect_clean_cwd = true) {
-    const fs::path out = dir_ / "io" / "stdout", err = dir_ / "io" / "stderr";
-    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && '" + QM3D_BINARY + "' " + args +
-                            " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    const CliRun r = test::run_qm3d(args, dir_ / "cwd", dir_ / "io");
     if (expect_clean_cwd) {
       EXPECT_TRUE(fs::is_empty(dir_ / "cwd")) << "qm3d " << args << " wrote into the working directory";
     }

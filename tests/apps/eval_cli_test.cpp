@@ -13,25 +13,16 @@
 
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/pooling.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace qm3d {
 namespace {
 
 namespace fs = std::filesystem;
+using test::CliRun;
+using test::slurp;
 using nlohmann::json;
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
@@ -66,11 +57,7 @@ class EvalCli : public ::testing::Test {
   // Runs qm3d with `args` (after `env`, e.g. "PATH=/none") in an empty working directory,
   // checked to stay empty.
   CliRun qm3d(const std::string& args, const std::string& env = "") {
-    const fs::path out = dir_ / "io" / "stdout", err = dir_ / "io" / "stderr";
-    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && " + env + " '" + QM3D_BINARY +
-                            "' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    CliRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    const CliRun r = test::run_qm3d(args, dir_ / "cwd", dir_ / "io", env);
     EXPECT_TRUE(fs::is_empty(dir_ / "cwd"))
         << "qm3d " << args << " wrote into the working directory";
     return r;

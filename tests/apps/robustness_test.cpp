@@ -9,24 +9,15 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace qm3d {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Outcome {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::CliRun;
+using test::slurp;
 
 class Unusual : public ::testing::Test {
  protected:
@@ -44,14 +35,12 @@ class Unusual : public ::testing::Test {
   }
 
   // Runs `qm3d <metric> a b --map map.ply` (under a time limit) in an empty directory.
-  Outcome run(const std::string& metric, const fs::path& a, const fs::path& b) {
-    const fs::path out = dir_ / "stdout", err = dir_ / "stderr", map = dir_ / "map.ply";
+  CliRun run(const std::string& metric, const fs::path& a, const fs::path& b) {
+    const fs::path map = dir_ / "map.ply";
     fs::remove(map);
-    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && timeout 60 '" + QM3D_BINARY +
-                            "' " + metric + " '" + a.string() + "' '" + b.string() + "' --map '" +
-                            map.string() + "' > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    Outcome o{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+    const CliRun o = test::run_qm3d(metric + " '" + a.string() + "' '" + b.string() + "' --map '" +
+                                        map.string() + "'",
+                                    dir_ / "cwd", dir_);
     EXPECT_TRUE(fs::is_empty(dir_ / "cwd"));
     if (o.code != 0) {
       EXPECT_FALSE(fs::exists(map)) << "partial output after a failure";
@@ -61,7 +50,7 @@ class Unusual : public ::testing::Test {
 
   // The input is rejected: exit 2, one line on stderr naming `name`, containing `what`.
   void expect_rejected(const std::string& metric, const fs::path& p, const std::string& what) {
-    const Outcome o = run(metric, p, p);
+    const CliRun o = run(metric, p, p);
     EXPECT_EQ(o.code, 2) << metric << " " << p << "\n" << o.err;
     EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << o.err;
     EXPECT_EQ(o.err.rfind("qm3d: error: ", 0), 0u) << o.err;
@@ -157,7 +146,7 @@ TEST_F(Unusual, ColoursOutOfRangeMissingOrAbsent) {
 
 TEST_F(Unusual, PathsThatAreNotReadableFiles) {
   expect_rejected("cmdm", dir_ / "cwd", "");  // a directory
-  const Outcome missing = run("pcqm", dir_ / "nope.ply", dir_ / "nope.ply");
+  const CliRun missing = run("pcqm", dir_ / "nope.ply", dir_ / "nope.ply");
   EXPECT_EQ(missing.code, 2);
   EXPECT_NE(missing.err.find("nope.ply: no such file"), std::string::npos) << missing.err;
   const fs::path under_file = file("plain.txt", "x") / "a.ply";
@@ -183,7 +172,7 @@ TEST_F(Unusual, DuplicatePointsAreKept) {
   std::string dup = cloud;
   dup.replace(dup.find("element vertex 3"), 16, "element vertex 4");
   dup += "0 0 0 255 0 0\n";
-  const Outcome o = run("pcqm", file("dup.ply", dup), file("cloud.ply", cloud));
+  const CliRun o = run("pcqm", file("dup.ply", dup), file("cloud.ply", cloud));
   EXPECT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("PCQM = "), std::string::npos);
 }
@@ -193,14 +182,14 @@ TEST_F(Unusual, DegenerateNonManifoldAndIsolatedAreRepairedWithWarnings) {
   // a face repeating a vertex (dropped), a zero-area face (kept), an isolated vertex (dropped)
   const fs::path degenerate = file("degenerate.obj", quad + "v 2 2 2 1 1 1\nv 0.5 0 0 1 1 1\n"
                                                             "f 1 2 3\nf 1 3 4\nf 1 1 2\nf 1 6 2\n");
-  const Outcome d = run("cmdm", degenerate, degenerate);
+  const CliRun d = run("cmdm", degenerate, degenerate);
   EXPECT_EQ(d.code, 0) << d.err;
   EXPECT_NE(d.err.find("dropped 1 vertices that no face uses"), std::string::npos) << d.err;
   EXPECT_NE(d.err.find("dropped 1 faces that repeat a vertex"), std::string::npos) << d.err;
   // three triangles sharing one edge: non-manifold, repaired by duplicating vertices
   const fs::path fan = file("fan.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 0 -1 0 1 1 0\n"
                                        "v 0 0 1 0 1 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
-  const Outcome n = run("cmdm", fan, fan);
+  const CliRun n = run("cmdm", fan, fan);
   EXPECT_EQ(n.code, 0) << n.err;
   EXPECT_NE(n.err.find("non-manifold mesh repaired"), std::string::npos) << n.err;
   EXPECT_LT(std::stod(n.out.substr(n.out.find('=') + 1)), 1e-12) << n.out;
@@ -230,8 +219,8 @@ TEST_F(Unusual, LargeCoordinateOffsetsGiveTheSameCmdm) {
     return o.str();
   };
   const fs::path a = file("a.off", shifted(in)), b = file("b.off", shifted(in2));
-  const Outcome far = run("cmdm", a, b);
-  const Outcome near = run("cmdm", test::reference_dir() / "cmdm" / "blob4_ref.off",
+  const CliRun far = run("cmdm", a, b);
+  const CliRun near = run("cmdm", test::reference_dir() / "cmdm" / "blob4_ref.off",
                            test::reference_dir() / "cmdm" / "blob4_colnoise.off");
   ASSERT_EQ(far.code, 0) << far.err;
   const double s_far = std::stod(far.out.substr(7)), s_near = std::stod(near.out.substr(7));

@@ -244,5 +244,21 @@ TEST(ReadCloudErrors, MissingOrMalformedFiles) {
   EXPECT_THROW(read_cloud(dir / "cut.pcd"), FormatError);
 }
 
+// Found by fuzz_pcd: a header with COUNT 0 made PCL's readHeader throw a std::exception that
+// escaped as an internal error. It must be a FormatError naming the file.
+TEST(ReadCloudErrors, FuzzRegressionZeroFieldCount) {
+  expect_error_mentioning<FormatError>(
+      std::filesystem::path(QM3D_TEST_DATA_DIR) / "regression_zero_count.pcd", "PCD");
+}
+
+// A header claiming far more points than the file holds fails before PCL allocates them.
+TEST(ReadCloudErrors, PcdHeaderClaimingTooManyPoints) {
+  const auto dir = temp_dir("huge");
+  std::ofstream(dir / "huge.pcd") << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\n"
+                                     "TYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2147483647\nHEIGHT 1\n"
+                                     "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2147483647\nDATA ascii\n0 0 0 1\n";
+  expect_error_mentioning<FormatError>(dir / "huge.pcd", "too short");
+}
+
 }  // namespace
 }  // namespace qm3d::pointcloud

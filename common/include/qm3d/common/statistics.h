@@ -41,6 +41,9 @@ PairedMoments weighted_moments(const std::vector<double>& x1, const std::vector<
 /// Unweighted moments (divide by n), covariance not clamped: PCQM's lightness structure.
 PairedMoments unweighted_moments(const std::vector<double>& x1, const std::vector<double>& x2);
 
+/// Population standard deviation sqrt(sum (x - mean)^2 / n), summed in order.
+double population_sd(const std::vector<double>& x, double mean);
+
 /// sum w x / sum w.
 double weighted_mean(const std::vector<double>& x, const std::vector<double>& w);
 
