@@ -111,6 +111,17 @@ std::string resolved_metric(const Pair& pair, const std::filesystem::path& list)
   }
 }
 
+// The metrics of a pair: "compare" becomes one row per metric of compare_metrics (so --resume
+// keys stay (reference, distorted, metric)); anything else is one metric.
+std::vector<std::string> resolved_metrics(const Pair& pair, const std::filesystem::path& list) {
+  if (pair.metric != "compare") return {resolved_metric(pair, list)};
+  try {
+    return compare_metrics(resolve(list, pair.reference), resolve(list, pair.distorted));
+  } catch (const Error&) {
+    return {"cmdm"};  // the run will report why the file cannot be read
+  }
+}
+
 std::string format_duration(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   std::ostringstream o;
@@ -187,16 +198,19 @@ int run_batch(const BatchOptions& o) {
     std::filesystem::remove(o.output);
   }
   std::vector<std::pair<Pair, std::string>> todo;
+  std::size_t rows = 0;  // (pair, metric) rows the list asks for
   for (const Pair& p : pairs) {
-    const std::string metric = resolved_metric(p, o.list);
-    if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
+    for (const std::string& metric : resolved_metrics(p, o.list)) {
+      ++rows;
+      if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
+    }
   }
   RowWriter writer(o.output);
   if (!exists || !o.resume || std::filesystem::file_size(o.output) == 0) {
     writer.write_line(csv_header());
   }
-  if (!o.quiet && todo.size() < pairs.size()) {
-    std::cerr << "batch: " << pairs.size() - todo.size() << " pairs already done, "
+  if (!o.quiet && todo.size() < rows) {
+    std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
               << todo.size() << " to go\n";
   }
   Progress progress(std::max<std::size_t>(todo.size(), 1), o.quiet || todo.empty());

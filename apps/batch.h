@@ -9,7 +9,9 @@ namespace qm3d::app {
 
 struct BatchOptions {
   std::filesystem::path list;    ///< CSV with columns reference,distorted[,metric]; metric is
-                                 ///< cmdm, msdm2, pcqm or auto (CMDM for meshes, else PCQM)
+                                 ///< cmdm, msdm2, pcqm, pcqm_sampled, compare (one row
+                                 ///< per metric of compare_metrics) or auto (CMDM for
+                                 ///< meshes, else PCQM)
   std::filesystem::path output;  ///< results CSV (appended to, row by row)
   int jobs = 1;                  ///< pairs scored at the same time
   int threads = 0;               ///< total threads (0 = all cores), shared among the jobs

@@ -9,6 +9,7 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
 #include "qm3d/mesh/mesh_io.h"
+#include "qm3d/mesh/texture.h"
 #include "qm3d/pointcloud/cloud_io.h"
 
 namespace qm3d::app {
@@ -163,17 +164,19 @@ MetricReport run_msdm2(const std::filesystem::path& reference,
                          });
 }
 
-MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
-                      const pointcloud::PcqmOptions& options, const std::filesystem::path& map) {
-  const auto start = std::chrono::steady_clock::now();
-  auto ref_task = std::async(std::launch::async, [&] { return load_cloud(reference); });
-  const ColoredCloud dist = load_cloud(distorted);
-  const ColoredCloud ref = ref_task.get();
+namespace {
+
+// PCQM on two clouds already in memory, reported under `metric`.
+MetricReport pcqm_report(const char* metric, const std::filesystem::path& reference,
+                         const std::filesystem::path& distorted, const ColoredCloud& ref,
+                         const ColoredCloud& dist, nlohmann::json options_json,
+                         const pointcloud::PcqmOptions& options,
+                         const std::filesystem::path& map) {
   pointcloud::PcqmOptions o = options;
   o.per_point = !map.empty();
   const pointcloud::PcqmResult r =
       naming_inputs(reference, distorted, [&] { return pointcloud::compute_pcqm(ref, dist, o); });
-  MetricReport report = new_report("pcqm", reference, distorted, pcqm_options_json(options), r.score);
+  MetricReport report = new_report(metric, reference, distorted, std::move(options_json), r.score);
   report.ref_to_dist =
       to_report(r.ref_to_dist.score, r.ref_to_dist.features, r.ref_to_dist.bbox_max_side);
   if (r.dist_to_ref) {
@@ -182,19 +185,72 @@ MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesys
   }
   report.warnings = r.warnings;
   if (!map.empty()) write_distortion_map(map, ref.positions, {}, r.ref_to_dist.per_point);
+  return report;
+}
+
+nlohmann::json sampling_json(const mesh::SamplingOptions& o) {
+  return {{"points", o.points}, {"density", o.density}, {"seed", o.seed}};
+}
+
+}  // namespace
+
+MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
+                      const pointcloud::PcqmOptions& options, const std::filesystem::path& map) {
+  const auto start = std::chrono::steady_clock::now();
+  auto ref_task = std::async(std::launch::async, [&] { return load_cloud(reference); });
+  const ColoredCloud dist = load_cloud(distorted);
+  const ColoredCloud ref = ref_task.get();
+  MetricReport report = pcqm_report("pcqm", reference, distorted, ref, dist,
+                                    pcqm_options_json(options), options, map);
   report.seconds = seconds_since(start);
   return report;
+}
+
+ColoredCloud sample_mesh_file(const std::filesystem::path& path,
+                              const mesh::SamplingOptions& options) {
+  if (lower_extension(path) == "obj" && mesh::obj_is_textured(read_file_bytes(path))) {
+    return mesh::sample_surface(mesh::read_textured_obj(path), options);
+  }
+  return mesh::sample_surface(mesh::read_mesh(path).mesh, options);
+}
+
+MetricReport run_pcqm_sampled(const std::filesystem::path& reference,
+                              const std::filesystem::path& distorted,
+                              const MetricOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto sample = [&](const std::filesystem::path& path) {
+    try {
+      return sample_mesh_file(path, options.sampling);
+    } catch (const NumericError& e) {
+      throw NumericError(path.string() + ": " + e.what());
+    }
+  };
+  auto ref_task = std::async(std::launch::async, [&] { return sample(reference); });
+  const ColoredCloud dist = sample(distorted);
+  const ColoredCloud ref = ref_task.get();
+  nlohmann::json json = pcqm_options_json(options.pcqm);
+  json["sampling"] = sampling_json(options.sampling);
+  MetricReport report =
+      pcqm_report("pcqm_sampled", reference, distorted, ref, dist, json, options.pcqm, {});
+  report.seconds = seconds_since(start);
+  return report;
+}
+
+std::vector<std::string> compare_metrics(const std::filesystem::path& reference,
+                                         const std::filesystem::path& distorted) {
+  if (is_mesh_file(reference) && is_mesh_file(distorted)) {
+    return {"cmdm", "msdm2", "pcqm", "pcqm_sampled"};
+  }
+  return {"pcqm"};
 }
 
 std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
                                       const std::filesystem::path& distorted,
                                       const MetricOptions& options) {
   std::vector<MetricReport> reports;
-  if (is_mesh_file(reference) && is_mesh_file(distorted)) {
-    reports.push_back(run_cmdm(reference, distorted, options.cmdm));
-    reports.push_back(run_msdm2(reference, distorted, options.msdm2));
+  for (const std::string& metric : compare_metrics(reference, distorted)) {
+    reports.push_back(run_metric(metric, reference, distorted, options));
   }
-  reports.push_back(run_pcqm(reference, distorted, options.pcqm));
   return reports;
 }
 
@@ -203,7 +259,9 @@ MetricReport run_metric(const std::string& metric, const std::filesystem::path& 
   if (metric == "cmdm") return run_cmdm(reference, distorted, options.cmdm);
   if (metric == "msdm2") return run_msdm2(reference, distorted, options.msdm2);
   if (metric == "pcqm") return run_pcqm(reference, distorted, options.pcqm);
-  throw FormatError("unknown metric '" + metric + "' (expected cmdm, msdm2, pcqm or auto)");
+  if (metric == "pcqm_sampled") return run_pcqm_sampled(reference, distorted, options);
+  throw FormatError("unknown metric '" + metric +
+                    "' (expected cmdm, msdm2, pcqm, pcqm_sampled, compare or auto)");
 }
 
 }  // namespace qm3d::app

@@ -7,6 +7,7 @@
 
 #include "qm3d/mesh/cmdm.h"
 #include "qm3d/mesh/msdm2.h"
+#include "qm3d/mesh/sampling.h"
 #include "qm3d/pointcloud/pcqm.h"
 #include "report.h"
 
@@ -33,20 +34,40 @@ MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesys
                       const pointcloud::PcqmOptions& options,
                       const std::filesystem::path& map = {});
 
+/// Samples drawn from each mesh for "pcqm_sampled" when no --points / --density is given.
+constexpr std::size_t kDefaultSampledPoints = 20000;
+
 /// Options of every metric, for the commands that run several.
 struct MetricOptions {
   mesh::CmdmOptions cmdm;
   mesh::Msdm2Options msdm2;
   pointcloud::PcqmOptions pcqm;
+  /// How "pcqm_sampled" samples both meshes (the same options, seed included, for both).
+  mesh::SamplingOptions sampling{kDefaultSampledPoints, 0, 1};
 };
 
-/// Every metric that applies to the pair: CMDM, MSDM2 and PCQM (on the vertices) for two
-/// meshes, PCQM for clouds.
+/// Samples the surface of a mesh file; a textured OBJ is coloured from its texture at each
+/// sample's UV, any other mesh from its vertex colours (mesh/sampling.h).
+ColoredCloud sample_mesh_file(const std::filesystem::path& path,
+                              const mesh::SamplingOptions& options);
+
+/// PCQM on clouds sampled from two mesh files with the same options ("pcqm_sampled").
+MetricReport run_pcqm_sampled(const std::filesystem::path& reference,
+                              const std::filesystem::path& distorted,
+                              const MetricOptions& options);
+
+/// The metrics `compare` runs on the pair: cmdm, msdm2, pcqm (on the vertices) and
+/// pcqm_sampled (on sampled clouds) for two meshes; pcqm for anything else.
+std::vector<std::string> compare_metrics(const std::filesystem::path& reference,
+                                         const std::filesystem::path& distorted);
+
+/// Every metric of compare_metrics, in that order.
 std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
                                       const std::filesystem::path& distorted,
                                       const MetricOptions& options);
 
-/// One metric by name ("cmdm", "msdm2", "pcqm"); FormatError for an unknown name.
+/// One metric by name ("cmdm", "msdm2", "pcqm", "pcqm_sampled"); FormatError for an unknown
+/// name.
 MetricReport run_metric(const std::string& metric, const std::filesystem::path& reference,
                         const std::filesystem::path& distorted, const MetricOptions& options);
 

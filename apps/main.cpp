@@ -17,6 +17,7 @@
 #include "qm3d/common/model_io.h"
 #include "qm3d/common/version.h"
 #include "report.h"
+#include "sample_commands.h"
 
 namespace qm3d::app {
 namespace {
@@ -203,18 +204,23 @@ int run(int argc, char** argv) {
   add_output_options(pcqm_cmd, out, true);
 
   auto* compare_cmd = app.add_subcommand(
-      "compare", "Every metric that applies: CMDM, MSDM2 and PCQM (on the vertices) for two "
-                 "meshes, PCQM for two clouds");
+      "compare", "Every metric that applies: CMDM, MSDM2, PCQM on the vertices and PCQM on "
+                 "surface samples (pcqm_sampled; both meshes sampled alike) for two meshes, PCQM "
+                 "for two clouds");
   add_global_options(compare_cmd, global);
   compare_cmd->add_option("REF", ref, "Reference")->required();
   compare_cmd->add_option("DIST", dist, "Distorted")->required();
   add_output_options(compare_cmd, out, false);
+  SamplingCli sampling;
+  const std::string sampling_note =
+      " for pcqm_sampled (default " + std::to_string(kDefaultSampledPoints) + ")";
+  add_sampling_options(compare_cmd, sampling, sampling_note);
 
   BatchOptions batch;
   std::string list, results;
   auto* batch_cmd = app.add_subcommand(
       "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = cmdm, "
-               "msdm2, pcqm or auto (CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's folder). Each row is appended "
+               "msdm2, pcqm, pcqm_sampled, compare (one row per metric) or auto (CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's folder). Each row is appended "
                "to RESULTS as soon as it is done; a failing pair records its error in its row");
   add_global_options(batch_cmd, global);
   batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
@@ -226,6 +232,7 @@ int run(int argc, char** argv) {
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
   add_cmdm_options(batch_cmd, cmdm, direction, weights);
   add_pcqm_options(batch_cmd, pcqm, bbox);
+  add_sampling_options(batch_cmd, sampling, sampling_note);
 
   auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d and print "
                                               "the table");
@@ -235,6 +242,8 @@ int run(int argc, char** argv) {
 
   const auto eval_commands =
       add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+  const auto sample_commands =
+      add_sample_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
 
   try {
     app.parse(argc, argv);
@@ -245,6 +254,7 @@ int run(int argc, char** argv) {
 
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
+  if (const auto code = run_sample_commands(*sample_commands)) return *code;
   cmdm.direction = parse_direction(direction);
   if (!weights.empty()) std::copy(weights.begin(), weights.end(), cmdm.model.weights.begin());
   cmdm.model.provenance = weights.empty() ? cmdm.model.provenance : "--weights";
@@ -253,7 +263,8 @@ int run(int argc, char** argv) {
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
   msdm2.direction = parse_direction(msdm2_direction);
-  const MetricOptions metrics{cmdm, msdm2, pcqm};
+  const MetricOptions metrics{cmdm, msdm2, pcqm,
+                              to_sampling_options(sampling, kDefaultSampledPoints)};
 
   std::vector<MetricReport> reports;
   if (*cmdm_cmd) reports.push_back(run_cmdm(ref, dist, cmdm, out.map));

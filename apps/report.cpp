@@ -46,6 +46,9 @@ void append_direction(std::ostringstream& row, const std::optional<DirectionRepo
   for (double f : d->features) row << ',' << format_double(f);
 }
 
+// PCQM on clouds, whether read ("pcqm") or sampled from meshes ("pcqm_sampled").
+bool is_pcqm(const std::string& metric) { return metric.rfind("pcqm", 0) == 0; }
+
 }  // namespace
 
 std::string format_double(double v) {
@@ -63,7 +66,7 @@ std::string text_line(const MetricReport& r) {
       << short_number(r.ref_to_dist->score) << ")";
   } else if (r.dist_to_ref) {
     o << "  (dist\u2192ref)";
-  } else if (r.ref_to_dist && r.metric != "pcqm") {
+  } else if (r.ref_to_dist && !is_pcqm(r.metric)) {
     o << "  (ref\u2192dist)";
   }
   return o.str();
@@ -71,7 +74,7 @@ std::string text_line(const MetricReport& r) {
 
 nlohmann::json to_json(const MetricReport& r) {
   // CMDM reports f1..f8 (the paper's names); PCQM F1..F8 (its paper's).
-  const char* prefix = r.metric == "pcqm" ? "F" : "f";
+  const char* prefix = is_pcqm(r.metric) ? "F" : "f";
   nlohmann::json j = {{"metric", r.metric},          {"version", kVersion},
                       {"reference", r.reference},    {"distorted", r.distorted},
                       {"options", r.options},        {"score", number(r.score)},
@@ -80,8 +83,8 @@ nlohmann::json to_json(const MetricReport& r) {
   if (r.dist_to_ref) directions["dist_to_ref"] = direction_json(*r.dist_to_ref, prefix);
   if (r.ref_to_dist) directions["ref_to_dist"] = direction_json(*r.ref_to_dist, prefix);
   const bool both = r.dist_to_ref && r.ref_to_dist;
-  if (r.metric != "pcqm" || both) j["directions"] = directions;
-  if (r.metric == "pcqm" && r.ref_to_dist) {
+  if (!is_pcqm(r.metric) || both) j["directions"] = directions;
+  if (is_pcqm(r.metric) && r.ref_to_dist) {
     // PCQM's own result is the reference -> distorted direction.
     j["features"] = features_json(r.ref_to_dist->features, prefix);
     j["bbox_max_side"] = number(r.ref_to_dist->bbox_max_side);

@@ -7,6 +7,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
+#include "qm3d/mesh/texture.h"
 #include "text_lines.h"
 
 namespace qm3d::mesh {
@@ -92,7 +93,8 @@ RawMesh parse_obj(const std::string& text, const std::string& file) {
       }
       m.face_offsets.push_back(static_cast<std::uint32_t>(m.face_indices.size()));
     }
-    // Other statements (vt, vn, g, o, s, usemtl, mtllib, l, p) do not affect the metric.
+    // Other statements (vn, g, o, s, l, p) do not affect the metric; vt, usemtl and mtllib are
+    // read by read_textured_obj (texture.h).
   }
   return m;
 }
@@ -358,12 +360,21 @@ MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::stri
 
 MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options) {
   const MeshFormat format = format_of(path);
-  return parse_mesh(read_file_bytes(path), format, path.string(), options);
+  const std::string bytes = read_file_bytes(path);
+  // Colours of a textured OBJ come from its texture (texture.h); MSDM2 ignores colours.
+  if (format == MeshFormat::kObj && options.require_colors && obj_is_textured(bytes)) {
+    return read_textured_obj(path).file;
+  }
+  return parse_mesh(bytes, format, path.string(), options);
 }
 
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
   const MeshFormat format = format_of(path);
-  RawMesh raw = parse_raw(read_file_bytes(path), format, path.string());
+  const std::string bytes = read_file_bytes(path);
+  if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
+    return vertex_cloud(read_textured_obj(path).file.mesh);
+  }
+  RawMesh raw = parse_raw(bytes, format, path.string());
   if (raw.positions.empty()) fail(path.string(), "no vertices");
   ColoredCloud cloud;
   cloud.colors = vertex_colors(raw, path.string());

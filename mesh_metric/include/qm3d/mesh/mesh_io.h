@@ -35,6 +35,9 @@ struct MeshReadOptions {
 /// Throws InputError (missing / unreadable path) or FormatError naming the file: unknown
 /// extension, malformed content, face index out of range, no vertex colours or colours on only
 /// some vertices, colour values outside [0, 255], no faces.
+/// An OBJ with an `mtllib` and no vertex colours is read as a textured mesh: its vertex colours
+/// are sampled from the texture (texture.h; errors for a missing MTL / texture, missing UVs or
+/// an undecodable image). With `require_colors == false` the texture is not read.
 MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options = {});
 
 /// The text and binary formats read_mesh understands.

@@ -1,0 +1,61 @@
+// Textured OBJ meshes (OBJ + MTL + PNG/JPEG texture): texture colours transferred to the
+// vertices, as the CMDM paper scored textured meshes (seed document 1.3.4), and kept with their
+// UVs for surface sampling.
+//
+// Conventions: UV (0, 0) is the bottom-left corner of the image, (1, 1) the top-right (OBJ);
+// texel (i, j) is centred at ((i + 0.5) / W, 1 - (j + 0.5) / H); lookups are bilinear between
+// the four nearest texel centres and wrap around (MTL's default `-clamp off`).
+// A vertex with several UVs (a texture seam) gets the average of the bilinear samples at its
+// distinct UVs. A material without `map_Kd` uses its `Kd` colour everywhere.
+//
+// \bug Only `map_Kd` (diffuse) is read; its options (-o, -s, -clamp, ...) are not supported.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/types.h"
+#include "qm3d/mesh/mesh_io.h"
+
+namespace qm3d::mesh {
+
+/// A texture coordinate (u, v), u to the right, v upwards, one period per unit.
+using Uv = std::array<double, 2>;
+
+/// An RGB image with sRGB channels in [0, 1]; texels row-major, row 0 the top row of the file.
+struct TextureImage {
+  int width = 0;
+  int height = 0;
+  std::vector<Rgb> texels;  ///< #width*#height
+};
+
+/// Reads a PNG or JPEG image (8-bit, any channel count; alpha ignored, grey expanded).
+/// Throws InputError when the file is missing, FormatError naming it when the image cannot be
+/// decoded.
+TextureImage read_texture(const std::filesystem::path& path);
+
+/// Bilinear, wrapping lookup of `image` at `uv` (conventions above).
+Rgb sample_texture(const TextureImage& image, const Uv& uv);
+
+/// A mesh whose colours come from textures.
+struct TexturedMesh {
+  /// The mesh as read_mesh returns it; its vertex colours are the texture colours (above).
+  MeshFile file;
+  std::vector<Uv> uvs;                          ///< every `vt` of the file
+  std::vector<Triangle> triangle_uvs;           ///< #F: for each corner, an index into `uvs`
+  std::vector<std::uint32_t> triangle_texture;  ///< #F: an index into `textures`
+  std::vector<TextureImage> textures;           ///< one per material
+};
+
+/// True when `obj_text` is an OBJ whose colours come from materials: it names an `mtllib` and
+/// no vertex carries an `r g b` colour.
+bool obj_is_textured(const std::string& obj_text);
+
+/// Reads an OBJ with its MTL and textures (paths relative to the file that names them).
+/// Throws InputError / FormatError naming the file at fault: missing MTL or texture file, an
+/// undecodable image, a face without UVs or without a material, an unknown material.
+TexturedMesh read_textured_obj(const std::filesystem::path& path);
+
+}  // namespace qm3d::mesh
