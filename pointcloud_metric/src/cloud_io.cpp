@@ -126,54 +126,105 @@ pcl::PCLPointCloud2 read_pcd_header(const std::filesystem::path& path, pcl::PCDR
   return header;
 }
 
-// Numbers of a PCD header line (non-numbers count as 0).
-std::vector<std::uintmax_t> header_numbers(std::istringstream& words) {
-  std::vector<std::uintmax_t> numbers;
-  for (std::string w; words >> w;) {
-    const bool digits = !w.empty() && w.size() < 19 &&
-                        std::all_of(w.begin(), w.end(), [](unsigned char c) { return std::isdigit(c); });
-    numbers.push_back(digits ? std::stoull(w) : 0);
-  }
-  return numbers;
+// A PCD header as the PCD v0.7 format defines it, read strictly by us before PCL sees the file:
+// PCL's own header reader throws, corrupts memory or allocates from the counts on malformed
+// headers (found by fuzz_pcd).
+struct PcdLayout {
+  std::vector<std::string> fields;
+  std::vector<std::uintmax_t> sizes, counts;
+  std::vector<std::string> types;
+  std::uintmax_t width = 0, height = 0, points = 0, header_bytes = 0;
+  std::string data;
+};
+
+std::uintmax_t header_count(const std::string& w, const std::filesystem::path& path,
+                            const std::string& key) {
+  const bool digits = !w.empty() && w.size() < 12 &&
+                      std::all_of(w.begin(), w.end(), [](unsigned char c) { return std::isdigit(c); });
+  if (!digits) throw FormatError(path.string() + ": PCD " + key + ": '" + w + "' is not a count");
+  return std::stoull(w);
 }
 
-// PCL allocates the whole point array from the header's counts, already while reading the
-// header: the counts are checked against the file size first, on our own reading of the header
-// (binary: exact size; binary_compressed: LZF expands at most ~1:64 here; ASCII: at least two
-// characters per value).
-void check_pcd_size(const std::filesystem::path& path) {
-  const std::uintmax_t file_size = std::filesystem::file_size(path);
-  std::ifstream in(path, std::ios::binary);
-  std::string line, key, data;
-  std::uintmax_t points = 0, offset = 0;
-  std::vector<std::uintmax_t> sizes, counts;
-  while (data.empty() && offset < (1u << 16) && std::getline(in, line)) {
-    offset += line.size() + 1;
-    std::istringstream words(line);
-    words >> key;
-    if (key == "DATA") {
-      words >> data;
-    } else if (key == "POINTS" || key == "SIZE" || key == "COUNT") {
-      const auto numbers = header_numbers(words);
-      if (key == "POINTS" && !numbers.empty()) points = numbers[0];
-      if (key == "SIZE") sizes = numbers;
-      if (key == "COUNT") counts = numbers;
+void header_line(PcdLayout& l, const std::string& key, const std::vector<std::string>& words,
+                 const std::filesystem::path& path) {
+  auto counts = [&] {
+    std::vector<std::uintmax_t> v;
+    for (const auto& w : words) v.push_back(header_count(w, path, key));
+    return v;
+  };
+  if (key == "VERSION" || key == "VIEWPOINT") return;
+  if (key == "FIELDS") l.fields = words;
+  else if (key == "SIZE") l.sizes = counts();
+  else if (key == "TYPE") l.types = words;
+  else if (key == "COUNT") l.counts = counts();
+  else if (key == "WIDTH" && words.size() == 1) l.width = header_count(words[0], path, key);
+  else if (key == "HEIGHT" && words.size() == 1) l.height = header_count(words[0], path, key);
+  else if (key == "POINTS" && words.size() == 1) l.points = header_count(words[0], path, key);
+  else if (key == "DATA" && words.size() == 1) l.data = words[0];
+  else throw FormatError(path.string() + ": not a PCD file (unexpected header line '" + key + "')");
+}
+
+void check_layout(const PcdLayout& l, const std::filesystem::path& path) {
+  const auto fail = [&](const std::string& what) {
+    throw FormatError(path.string() + ": PCD header: " + what);
+  };
+  const std::size_t n = l.fields.size();
+  if (n == 0 || n > 256) fail("FIELDS missing or too many");
+  if (l.sizes.size() != n || l.types.size() != n) fail("SIZE and TYPE must have one entry per field");
+  if (!l.counts.empty() && l.counts.size() != n) fail("COUNT must have one entry per field");
+  for (std::size_t f = 0; f < n; ++f) {
+    const auto size = l.sizes[f];
+    const bool valid_type = l.types[f] == "I" || l.types[f] == "U" ||
+                            (l.types[f] == "F" && (size == 4 || size == 8));
+    if (!(size == 1 || size == 2 || size == 4 || size == 8) || !valid_type) {
+      fail("field '" + l.fields[f] + "' has SIZE " + std::to_string(size) + " and TYPE " + l.types[f]);
+    }
+    if (!l.counts.empty() && (l.counts[f] < 1 || l.counts[f] > 4096)) {
+      fail("field '" + l.fields[f] + "' has COUNT " + std::to_string(l.counts[f]));
     }
   }
-  std::uintmax_t values = 0, point_step = 0;
-  for (std::size_t f = 0; f < sizes.size(); ++f) {
-    const std::uintmax_t count = f < counts.size() ? std::max<std::uintmax_t>(counts[f], 1) : 1;
-    values += count;
-    point_step += std::min<std::uintmax_t>(sizes[f], 8) * count;
+  if (l.data != "ascii" && l.data != "binary" && l.data != "binary_compressed") {
+    fail("DATA must be ascii, binary or binary_compressed");
   }
-  const std::uintmax_t body = file_size > offset ? file_size - offset : 0;
-  const std::uintmax_t per_point = data == "ascii" ? 2 * std::max<std::uintmax_t>(values, 1)
-                                   : data == "binary_compressed" ? 0
-                                                                 : std::max<std::uintmax_t>(point_step, 1);
-  const bool too_many = per_point > 0 ? points > (body + 64) / per_point
-                                      : points * std::max<std::uintmax_t>(point_step, 1) > 64 * (body + 64);
-  if (too_many) {
-    throw FormatError(path.string() + ": PCD header declares " + std::to_string(points) +
+  if (l.width * l.height != l.points) fail("POINTS differs from WIDTH x HEIGHT");
+}
+
+PcdLayout read_pcd_layout(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  PcdLayout l;
+  std::string line;
+  while (l.data.empty() && l.header_bytes < (1u << 16) && std::getline(in, line)) {
+    l.header_bytes += line.size() + 1;
+    std::istringstream words(line);
+    std::string key;
+    if (!(words >> key) || key[0] == '#') continue;
+    std::vector<std::string> rest;
+    for (std::string w; words >> w;) rest.push_back(w);
+    header_line(l, key, rest, path);
+  }
+  if (l.data.empty()) throw FormatError(path.string() + ": not a PCD file (no DATA line)");
+  check_layout(l, path);
+  return l;
+}
+
+// PCL allocates the whole point array from the header's counts: refuse counts the file cannot
+// hold (binary: exact size; binary_compressed: LZF expands at most ~1:64 here; ASCII: at least
+// two characters per value).
+void validate_pcd_header(const std::filesystem::path& path) {
+  const PcdLayout l = read_pcd_layout(path);
+  std::uintmax_t values = 0, point_step = 0;
+  for (std::size_t f = 0; f < l.fields.size(); ++f) {
+    const std::uintmax_t count = l.counts.empty() ? 1 : l.counts[f];
+    values += count;
+    point_step += l.sizes[f] * count;
+  }
+  const std::uintmax_t file_size = std::filesystem::file_size(path);
+  const std::uintmax_t body = file_size > l.header_bytes ? file_size - l.header_bytes : 0;
+  const std::uintmax_t needed = l.data == "ascii"    ? l.points * 2 * values
+                                : l.data == "binary" ? l.points * point_step
+                                                     : l.points * point_step / 64;
+  if (needed > body + 64) {
+    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
                       " points but the file is too short to hold them");
   }
 }
@@ -182,7 +233,7 @@ ColoredCloud read_pcd(const std::filesystem::path& path) {
   require_readable(path);
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are ours, one line each
   pcl::PCDReader reader;
-  check_pcd_size(path);
+  validate_pcd_header(path);
   pcl::PCLPointCloud2 cloud = read_pcd_header(path, reader);
   // Check the fields on the header before reading any data.
   coordinate_field(cloud, path, "x");
@@ -207,6 +258,15 @@ ColoredCloud read_pcd(const std::filesystem::path& path) {
                                       &coordinate_field(cloud, path, "y"),
                                       &coordinate_field(cloud, path, "z")};
   const pcl::PCLPointField& rgb = colour_field(cloud, path);
+  // A malformed header (SIZE/COUNT inconsistent with TYPE) can put a field beyond the point
+  // record: found by fuzz_pcd as a heap overflow.
+  for (const pcl::PCLPointField* f : {xyz[0], xyz[1], xyz[2], &rgb}) {
+    const std::size_t bytes = f->datatype == pcl::PCLPointField::FLOAT64 ? 8 : 4;
+    if (std::size_t(f->offset) + bytes > cloud.point_step) {
+      throw FormatError(path.string() + ": PCD field '" + f->name +
+                        "' does not fit in its point record (SIZE/COUNT/TYPE disagree)");
+    }
+  }
   ColoredCloud out;
   out.positions.resize(n);
   out.colors.resize(n);

@@ -251,6 +251,13 @@ TEST(ReadCloudErrors, FuzzRegressionZeroFieldCount) {
       std::filesystem::path(QM3D_TEST_DATA_DIR) / "regression_zero_count.pcd", "PCD");
 }
 
+// Found by fuzz_pcd (ASan heap-buffer-overflow): SIZE/COUNT/TYPE that disagree put a field
+// beyond the point record.
+TEST(ReadCloudErrors, FuzzRegressionFieldBeyondRecord) {
+  EXPECT_THROW(read_cloud(std::filesystem::path(QM3D_TEST_DATA_DIR) / "regression_field_overflow.pcd"),
+               FormatError);
+}
+
 // A header claiming far more points than the file holds fails before PCL allocates them.
 TEST(ReadCloudErrors, PcdHeaderClaimingTooManyPoints) {
   const auto dir = temp_dir("huge");
