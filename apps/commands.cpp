@@ -208,10 +208,14 @@ MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesys
 
 ColoredCloud sample_mesh_file(const std::filesystem::path& path,
                               const mesh::SamplingOptions& options) {
-  if (lower_extension(path) == "obj" && mesh::obj_is_textured(read_file_bytes(path))) {
-    return mesh::sample_surface(mesh::read_textured_obj(path), options);
+  if (lower_extension(path) != "obj") return mesh::sample_surface(mesh::read_mesh(path).mesh, options);
+  // A textured OBJ is sampled from its texture at each sample's UV; the file is read once.
+  const std::string bytes = read_file_bytes(path);
+  if (mesh::obj_is_textured(bytes)) {
+    return mesh::sample_surface(mesh::parse_textured_obj(bytes, path), options);
   }
-  return mesh::sample_surface(mesh::read_mesh(path).mesh, options);
+  return mesh::sample_surface(mesh::parse_mesh(bytes, mesh::MeshFormat::kObj, path.string()).mesh,
+                              options);
 }
 
 MetricReport run_pcqm_sampled(const std::filesystem::path& reference,

@@ -363,7 +363,7 @@ MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& opt
   const std::string bytes = read_file_bytes(path);
   // Colours of a textured OBJ come from its texture (texture.h); MSDM2 ignores colours.
   if (format == MeshFormat::kObj && options.require_colors && obj_is_textured(bytes)) {
-    return read_textured_obj(path).file;
+    return parse_textured_obj(bytes, path).file;
   }
   return parse_mesh(bytes, format, path.string(), options);
 }
@@ -372,7 +372,7 @@ ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
   const MeshFormat format = format_of(path);
   const std::string bytes = read_file_bytes(path);
   if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
-    return vertex_cloud(read_textured_obj(path).file.mesh);
+    return vertex_cloud(parse_textured_obj(bytes, path).file.mesh);
   }
   RawMesh raw = parse_raw(bytes, format, path.string());
   if (raw.positions.empty()) fail(path.string(), "no vertices");

@@ -278,7 +278,10 @@ bool obj_is_textured(const std::string& obj_text) {
 }
 
 TexturedMesh read_textured_obj(const std::filesystem::path& path) {
-  const std::string text = read_file_bytes(path);
+  return parse_textured_obj(read_file_bytes(path), path);
+}
+
+TexturedMesh parse_textured_obj(const std::string& text, const std::filesystem::path& path) {
   TexturedMesh out;
   out.file = parse_mesh(text, MeshFormat::kObj, path.string(), {/*require_colors=*/false});
   const ObjTexturing t = parse_obj_texturing(text, path.string());

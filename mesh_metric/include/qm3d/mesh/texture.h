@@ -58,4 +58,7 @@ bool obj_is_textured(const std::string& obj_text);
 /// undecodable image, a face without UVs or without a material, an unknown material.
 TexturedMesh read_textured_obj(const std::filesystem::path& path);
 
+/// The same for an OBJ already read into `obj_text`; `path` locates its MTL and textures.
+TexturedMesh parse_textured_obj(const std::string& obj_text, const std::filesystem::path& path);
+
 }  // namespace qm3d::mesh
