@@ -143,9 +143,9 @@ struct CellBound {
 
 }  // namespace
 
-template <typename Visitor>
-void KdTree::radius_visit(std::uint32_t node_index, const Vec3& query, double radius2,
-                          Visitor& visit) const {
+template <typename Limit, typename Leaf>
+void KdTree::descend(std::uint32_t node_index, const Vec3& query, const Limit& limit,
+                     Leaf&& on_leaf) const {
   struct Frame {
     std::uint32_t node;
     CellBound bound;
@@ -153,16 +153,13 @@ void KdTree::radius_visit(std::uint32_t node_index, const Vec3& query, double ra
   Frame stack[64];
   int top = 0;
   stack[top++] = Frame{node_index, CellBound{}};
-  const double limit = radius2 * kPruneSlack;
   while (top > 0) {
     Frame f = stack[--top];
+    if (f.bound.distance2 > limit()) continue;
     for (;;) {
       const Node& node = nodes_[f.node];
       if (node.axis == kLeaf) {
-        for (std::uint32_t i = node.first; i < node.last; ++i) {
-          const double d2 = squared_distance(query, points_[i]);
-          if (d2 < radius2) visit(d2, i);
-        }
+        on_leaf(node.first, node.last);
         break;
       }
       const double diff = query[node.axis] - node.split;
@@ -171,10 +168,23 @@ void KdTree::radius_visit(std::uint32_t node_index, const Vec3& query, double ra
       CellBound far = f.bound;
       far.distance2 += diff * diff - far.offset[node.axis] * far.offset[node.axis];
       far.offset[node.axis] = diff;
-      if (far.distance2 <= limit) stack[top++] = Frame{far_child, far};
+      if (far.distance2 <= limit()) stack[top++] = Frame{far_child, far};
       f.node = near_child;
     }
   }
+}
+
+template <typename Visitor>
+void KdTree::radius_visit(std::uint32_t node_index, const Vec3& query, double radius2,
+                          Visitor& visit) const {
+  const double limit = radius2 * kPruneSlack;
+  descend(node_index, query, [limit] { return limit; },
+          [&](std::uint32_t first, std::uint32_t last) {
+            for (std::uint32_t i = first; i < last; ++i) {
+              const double d2 = squared_distance(query, points_[i]);
+              if (d2 < radius2) visit(d2, i);
+            }
+          });
 }
 
 void KdTree::radius_search(const Vec3& query, double radius2, std::vector<Neighbour>& out) const {
@@ -320,36 +330,10 @@ class KnnRadiusSet {
 
 template <typename Set>
 void KdTree::knn_visit(std::uint32_t node_index, const Vec3& query, Set& set) const {
-  // Depth-first, nearer child first, far children kept with their cell bound and re-checked
-  // against the shrinking worst distance when popped.
-  struct Frame {
-    std::uint32_t node;
-    CellBound bound;
-  };
-  Frame stack[64];
-  int top = 0;
-  stack[top++] = Frame{node_index, CellBound{}};
-  while (top > 0) {
-    Frame f = stack[--top];
-    if (f.bound.distance2 > set.worst() * kPruneSlack) continue;
-    for (;;) {
-      const Node& node = nodes_[f.node];
-      if (node.axis == kLeaf) {
-        for (std::uint32_t i = node.first; i < node.last; ++i) {
-          set.add(squared_distance(query, points_[i]), i);
-        }
-        break;
-      }
-      const double diff = query[node.axis] - node.split;
-      const std::uint32_t near_child = diff < 0 ? f.node + 1 : node.first;
-      const std::uint32_t far_child = diff < 0 ? node.first : f.node + 1;
-      CellBound far = f.bound;
-      far.distance2 += diff * diff - far.offset[node.axis] * far.offset[node.axis];
-      far.offset[node.axis] = diff;
-      if (far.distance2 <= set.worst() * kPruneSlack) stack[top++] = Frame{far_child, far};
-      f.node = near_child;
-    }
-  }
+  descend(node_index, query, [&set] { return set.worst() * kPruneSlack; },
+          [&](std::uint32_t first, std::uint32_t last) {
+            for (std::uint32_t i = first; i < last; ++i) set.add(squared_distance(query, points_[i]), i);
+          });
 }
 
 void KdTree::knn_search(const Vec3& query, std::size_t k, std::vector<Neighbour>& out) const {

@@ -85,6 +85,11 @@ class KdTree {
   void index_leaves();
   void build(std::vector<Item>& items, std::size_t begin, std::size_t end, std::size_t node,
              const std::map<std::size_t, std::size_t>& subtree_nodes);
+  /// Depth-first descent from `node`, nearer child first; far children are kept with their cell
+  /// bound and skipped when it exceeds limit() (re-checked when popped, as limit() may shrink).
+  /// on_leaf(first, last) receives the point range of every leaf reached.
+  template <typename Limit, typename Leaf>
+  void descend(std::uint32_t node, const Vec3& query, const Limit& limit, Leaf&& on_leaf) const;
   template <typename Visitor>
   void radius_visit(std::uint32_t node, const Vec3& query, double radius2, Visitor& visit) const;
   template <typename Set>
