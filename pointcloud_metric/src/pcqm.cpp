@@ -67,7 +67,7 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
     warnings.push_back("PCQM: the " + name + " cloud's box size |min| + |max| = " + number(quirk) +
                        " differs from its longest side " + number(extent) +
                        " (the cloud does not straddle the origin); radii and curvatures follow "
-                       "the reference implementation's value, use BboxMode::kExtent for a "
+                       "the reference implementation's value; the extent bbox mode (qm3d --bbox extent) gives a "
                        "translation-invariant score");
   }
   return quirk;
