@@ -3,17 +3,6 @@
 #include "multiscale.h"
 
 namespace qm3d::mesh {
-namespace {
-
-// MEPP2 process_CMDM_multires (SPEC-CMDM 1.4-1.8): rc = 0.001, +0.0005 per scale; curvature
-// radius rc BB, neighbourhood 3 rc BB, sigma a third of it; crossing-edge curvature; Heron
-// distances from the projected point; ">= 0" walk test; colour; w1 covariances clamped at 0.
-constexpr detail::MultiscaleDefinition kCmdm{
-    "CMDM", detail::CurvatureVariant::kCmdm, 0.001, 0.0005, 3.0, 3.0,
-    detail::HeronAnchor::kProjectedPoint, /*strict_outward_test=*/false, /*uses_color=*/true,
-    kCmdmConventions};
-
-}  // namespace
 
 MeshMetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& distorted,
                               const CmdmOptions& options) {
@@ -34,7 +23,7 @@ MeshMetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& d
       r.local_distortion[v] = options.model.apply(sums[v]) / scales;
     }
   };
-  return detail::run_multiscale(reference, distorted, kCmdm,
+  return detail::run_multiscale(reference, distorted, detail::kCmdmDefinition,
                                 {options.direction, options.scales, table.get()}, pool);
 }
 

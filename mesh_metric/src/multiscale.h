@@ -30,6 +30,22 @@ struct MultiscaleDefinition {
   FeatureConventions conventions;
 };
 
+// The two metrics side by side: everything that differs between them, besides their pooling.
+
+/// MEPP2 process_CMDM_multires (SPEC-CMDM 1.4-1.8): rc = 0.001, +0.0005 per scale; curvature
+/// radius rc BB from crossing edges only; neighbourhood h = 3 rc BB, sigma = h / 3; Heron
+/// distances from the projected point; ">= 0" walk test; colour; w1 covariances clamped at 0.
+inline constexpr MultiscaleDefinition kCmdmDefinition{
+    "CMDM", CurvatureVariant::kCmdm, 0.001, 0.0005, 3.0, 3.0, HeronAnchor::kProjectedPoint,
+    /*strict_outward_test=*/false, /*uses_color=*/true, kCmdmConventions};
+
+/// MEPP2 process_msdm2_multires (SPEC-CMDM 2): rc = 0.002, +0.001 per scale; generic curvature
+/// (every edge in the ball); neighbourhood h = 5 rc BB, sigma = h / 2; Heron distances from the
+/// distorted vertex itself; "> 0" walk test; no colour; mixed-weight unclamped covariance.
+inline constexpr MultiscaleDefinition kMsdm2Definition{
+    "MSDM2", CurvatureVariant::kGeneric, 0.002, 0.001, 5.0, 2.0, HeronAnchor::kQueryPoint,
+    /*strict_outward_test=*/true, /*uses_color=*/false, kMsdm2Conventions};
+
 /// Pools one direction's per-vertex feature sums (over `scales` scales) into `result`.
 using DirectionPooling = std::function<void(const std::vector<FeatureVector>& sums, int scales,
                                             DirectionResult& result)>;
