@@ -16,6 +16,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "progress_display.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "report.h"
@@ -122,20 +123,10 @@ std::vector<std::string> resolved_metrics(const Pair& pair, const std::filesyste
   }
 }
 
-std::string format_duration(double s) {
-  if (!std::isfinite(s) || s < 0) return "?";
-  std::ostringstream o;
-  const long t = std::lround(s);
-  if (t >= 3600) o << t / 3600 << "h";
-  if (t >= 60) o << (t / 60) % 60 << "m";
-  o << t % 60 << "s";
-  return o.str();
-}
-
 class Progress {
  public:
   Progress(std::size_t total, bool quiet)
-      : total_(total), quiet_(quiet), tty_(::isatty(STDERR_FILENO) == 1),
+      : total_(total), quiet_(quiet), tty_(stderr_is_terminal()),
         start_(std::chrono::steady_clock::now()), last_(start_) {}
 
   void done_one(bool failed) {

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "demo.h"
 #include "eval_commands.h"
+#include "progress_display.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
@@ -55,6 +56,12 @@ void add_global_options(CLI::App* cmd, GlobalOptions& g) {
                   "Directory of the LAB2000HL tables (default: $QM3D_DATA_DIR, else " +
                       resolve_data_dir("").string() + ")")
       ->type_name("DIR");
+}
+
+void add_progress_flag(CLI::App* cmd, bool& progress) {
+  cmd->add_flag("--progress", progress,
+                "Report each stage on stderr even when it is not a terminal (on a terminal the "
+                "progress line is shown anyway, unless --quiet)");
 }
 
 void add_output_options(CLI::App* cmd, OutputOptions& o, bool with_map) {
@@ -160,6 +167,7 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);
+  bool progress = false;
   std::string ref, dist, direction = "symmetric", bbox = "reference";
   std::vector<double> weights;
   mesh::CmdmOptions cmdm;
@@ -168,6 +176,7 @@ int run(int argc, char** argv) {
 
   auto* cmdm_cmd = app.add_subcommand("cmdm", "CMDM between two coloured meshes (OBJ, OFF, PLY)");
   add_global_options(cmdm_cmd, global);
+  add_progress_flag(cmdm_cmd, progress);
   cmdm_cmd->add_option("REF", ref, "Reference mesh")->required();
   cmdm_cmd->add_option("DIST", dist, "Distorted mesh")->required();
   add_cmdm_options(cmdm_cmd, cmdm, direction, weights);
@@ -182,6 +191,7 @@ int run(int argc, char** argv) {
   auto* msdm2_cmd = app.add_subcommand(
       "msdm2", "MSDM2 (geometry only; colours ignored) between two meshes (OBJ, OFF, PLY)");
   add_global_options(msdm2_cmd, global);
+  add_progress_flag(msdm2_cmd, progress);
   msdm2_cmd->add_option("REF", ref, "Reference mesh")->required();
   msdm2_cmd->add_option("DIST", dist, "Distorted mesh")->required();
   msdm2_cmd->add_option("--direction", msdm2_direction,
@@ -197,6 +207,7 @@ int run(int argc, char** argv) {
   auto* pcqm_cmd = app.add_subcommand("pcqm", "PCQM between two coloured point clouds (PLY, PCD; "
                                               "OBJ/OFF/PLY meshes are read as their vertices)");
   add_global_options(pcqm_cmd, global);
+  add_progress_flag(pcqm_cmd, progress);
   pcqm_cmd->add_option("REF", ref, "Reference cloud (PCQM's first argument)")->required();
   pcqm_cmd->add_option("DIST", dist, "Distorted cloud")->required();
   add_pcqm_options(pcqm_cmd, pcqm, bbox);
@@ -208,6 +219,7 @@ int run(int argc, char** argv) {
                  "surface samples (pcqm_sampled; both meshes sampled alike) for two meshes, PCQM "
                  "for two clouds");
   add_global_options(compare_cmd, global);
+  add_progress_flag(compare_cmd, progress);
   compare_cmd->add_option("REF", ref, "Reference")->required();
   compare_cmd->add_option("DIST", dist, "Distorted")->required();
   add_output_options(compare_cmd, out, false);
@@ -263,8 +275,15 @@ int run(int argc, char** argv) {
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
   msdm2.direction = parse_direction(msdm2_direction);
-  const MetricOptions metrics{cmdm, msdm2, pcqm,
-                              to_sampling_options(sampling, kDefaultSampledPoints)};
+  MetricOptions metrics{cmdm, msdm2, pcqm, to_sampling_options(sampling, kDefaultSampledPoints)};
+  // One pair: its stages on stderr (batch shows pairs done instead).
+  const bool single_pair = *cmdm_cmd || *msdm2_cmd || *pcqm_cmd || *compare_cmd;
+  if (single_pair && !global.quiet && (progress || stderr_is_terminal())) {
+    const bool in_place = stderr_is_terminal();
+    cmdm.progress = metrics.cmdm.progress = stderr_progress("CMDM", in_place);
+    msdm2.progress = metrics.msdm2.progress = stderr_progress("MSDM2", in_place);
+    pcqm.progress = metrics.pcqm.progress = stderr_progress("PCQM", in_place);
+  }
 
   std::vector<MetricReport> reports;
   if (*cmdm_cmd) reports.push_back(run_cmdm(ref, dist, cmdm, out.map));

@@ -23,8 +23,9 @@ MeshMetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& d
       r.local_distortion[v] = options.model.apply(sums[v]) / scales;
     }
   };
-  return detail::run_multiscale(reference, distorted, detail::kCmdmDefinition,
-                                {options.direction, options.scales, table.get()}, pool);
+  const detail::MultiscaleRun run{options.direction, options.scales, table.get(),
+                                  options.progress};
+  return detail::run_multiscale(reference, distorted, detail::kCmdmDefinition, run, pool);
 }
 
 }  // namespace qm3d::mesh

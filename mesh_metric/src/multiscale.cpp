@@ -126,7 +126,8 @@ void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
 std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const PreparedMesh& second,
                                           const MultiscaleDefinition& def, int scales,
-                                          CurvatureCache& curvatures, SurfaceMatches matching) {
+                                          CurvatureCache& curvatures, SurfaceMatches matching,
+                                          const std::string& label, ProgressSteps& progress) {
   const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
   if (def.uses_color) lab_match = interpolate_colors(matches, second.mesh, second.lab);
@@ -134,6 +135,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const Prepa
   std::vector<FeatureVector> sums(first.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
   for (int level = 0; level < scales; ++level) {
+    progress.begin(label + ": scale " + std::to_string(level + 1) + "/" + std::to_string(scales));
     const auto& curv1 = curvatures.get(first.mesh, maxdim * rc, maxdim);
     const auto curv_match =
         interpolate_all(matches, second.mesh, curvatures.get(second.mesh, maxdim * rc, maxdim));
@@ -156,11 +158,16 @@ SurfaceMatches match(const PreparedMesh& first, const PreparedMesh& second,
 DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& second,
                               const MultiscaleDefinition& def, int scales,
                               CurvatureCache& curvatures, const DirectionPooling& pool,
-                              std::optional<SurfaceMatches> matching) {
+                              std::optional<SurfaceMatches> matching, const std::string& label,
+                              ProgressSteps& progress) {
   DirectionResult result;
   result.bbox_max_side = first.bbox_max_side;
-  auto sums = direction_sums(first, second, def, scales, curvatures,
-                             matching ? std::move(*matching) : match(first, second, def));
+  if (!matching) {
+    progress.begin(label + ": closest points");
+    matching = match(first, second, def);
+  }
+  auto sums = direction_sums(first, second, def, scales, curvatures, std::move(*matching), label,
+                             progress);
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
   if (result.local_distortion.size() > first.input_vertices) {
@@ -178,6 +185,10 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
     throw std::invalid_argument(std::string(def.name) +
                                 ": the number of scales must be between 1 and 100");
   }
+  const bool both = run.direction == Direction::kSymmetric;
+  // Steps of about equal cost: preparing, then per direction its matching and each scale.
+  ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + run.scales));
+  progress.begin("connectivity");
   // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
   auto ref_task = std::async(std::launch::async, [&] {
     return prepare(reference, "reference mesh", run, def.uses_color);
@@ -188,27 +199,28 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
-  const bool both = run.direction == Direction::kSymmetric;
   CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side);
   // Closest-point matching builds one AABB tree per direction, sequentially inside CGAL. When
   // both directions are needed and the trees are small, both are matched concurrently up front;
   // large meshes are matched one direction at a time to keep the memory peak low.
   std::optional<SurfaceMatches> d2r_matches, r2d_matches;
   if (both && ref.mesh.triangles.size() + dist.mesh.triangles.size() <= kConcurrentMatchFaces) {
+    progress.begin("closest points, both directions", 2);
     auto r2d = std::async(std::launch::async, [&] { return match(ref, dist, def); });
     d2r_matches = match(dist, ref, def);
     r2d_matches = r2d.get();
   }
   if (run.direction != Direction::kRefToDist) {
-    result.dist_to_ref =
-        run_direction(dist, ref, def, run.scales, curvatures, pool, std::move(d2r_matches));
+    result.dist_to_ref = run_direction(dist, ref, def, run.scales, curvatures, pool,
+                                       std::move(d2r_matches), "dist→ref", progress);
   }
   if (run.direction != Direction::kDistToRef) {
-    result.ref_to_dist =
-        run_direction(ref, dist, def, run.scales, curvatures, pool, std::move(r2d_matches));
+    result.ref_to_dist = run_direction(ref, dist, def, run.scales, curvatures, pool,
+                                       std::move(r2d_matches), "ref→dist", progress);
   }
   result.score = both ? (result.dist_to_ref->score + result.ref_to_dist->score) / 2
                       : (result.dist_to_ref ? result.dist_to_ref->score : result.ref_to_dist->score);
+  progress.finish();
   return result;
 }
 

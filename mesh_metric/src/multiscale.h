@@ -12,6 +12,7 @@
 #include "projection.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/features.h"
+#include "qm3d/common/progress.h"
 #include "qm3d/mesh/mesh_metric.h"
 
 namespace qm3d::mesh::detail {
@@ -54,6 +55,7 @@ struct MultiscaleRun {
   Direction direction = Direction::kSymmetric;
   int scales = 3;
   const Lab2000hlTable* colors = nullptr;  ///< required when the definition uses colour
+  ProgressCallback progress;               ///< optional: told each stage as it starts
 };
 
 /// Runs a metric on a pair of meshes: prepares both, computes the requested directions, and

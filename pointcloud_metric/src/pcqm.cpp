@@ -75,13 +75,16 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
 
 PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
                         const std::string& iterated_name, const PcqmOptions& o,
-                        const Lab2000hlTable& table, std::vector<std::string>& warnings) {
+                        const Lab2000hlTable& table, std::vector<std::string>& warnings,
+                        std::string label, ProgressSteps& progress) {
   detail::DirectionParams params;
   params.max_dim = max_dim(iterated, o.bbox, iterated_name, warnings);
   params.radius_rel = o.radius_rel;
   params.radius_factor = o.radius_factor;
   params.knn = static_cast<std::size_t>(o.knn);
   params.threads = o.threads;
+  params.progress = &progress;
+  params.label = std::move(label);
   const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
 
   PcqmDirection d;
@@ -106,15 +109,18 @@ PcqmResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& disto
   validate(distorted, "distorted");
   const auto table = Lab2000hlTable::shared(resolve_data_dir(options.data_dir));
 
+  ProgressSteps progress(options.progress,
+                         (options.symmetric ? 2 : 1) * detail::kProgressSteps);
   PcqmResult result;
-  result.ref_to_dist =
-      direction(reference, distorted, "reference", options, *table, result.warnings);
+  result.ref_to_dist = direction(reference, distorted, "reference", options, *table,
+                                 result.warnings, "ref→dist", progress);
   result.score = result.ref_to_dist.score;
   if (options.symmetric) {
-    result.dist_to_ref =
-        direction(distorted, reference, "distorted", options, *table, result.warnings);
+    result.dist_to_ref = direction(distorted, reference, "distorted", options, *table,
+                                   result.warnings, "dist→ref", progress);
     result.score = 0.5 * (result.ref_to_dist.score + result.dist_to_ref->score);
   }
+  progress.finish();
   return result;
 }
 

@@ -340,6 +340,10 @@ double reference_max_dim(const std::vector<Vec3>& positions) {
 
 DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& dist,
                                   const DirectionParams& params, const Lab2000hlTable& table) {
+  const auto stage = [&](const char* what) {
+    if (params.progress) params.progress->begin(params.label + ": " + what);
+  };
+  stage("search trees");
   const bool same_positions = ref.positions == dist.positions;
   const KdTree ref_tree(ref.positions, params.threads);
   std::optional<KdTree> own_dist_tree;
@@ -350,10 +354,12 @@ DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& d
   const Radii radii = radii_of(p);
   const Clouds clouds{ref, dist, ref_tree, dist_tree, same_positions};
 
+  stage("curvatures and correspondences");
   PointData data = stage1(clouds, p, radii, table);
   DirectionOutput out;
   std::vector<std::uint32_t> counts;
   if (p.diagnostics) counts.resize(ref_tree.size());
+  stage("features");
   out.features = stage2(ref_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
   if (p.diagnostics) {
     out.diagnostics = diagnostics_of(data, ref_tree);

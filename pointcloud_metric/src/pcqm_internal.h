@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "qm3d/common/color.h"
 #include "qm3d/common/features.h"
+#include "qm3d/common/progress.h"
 #include "qm3d/common/types.h"
 
 namespace qm3d::pointcloud::detail {
@@ -19,7 +21,13 @@ struct DirectionParams {
   std::size_t knn = 20;        ///< k of the correspondence kNN (already <= #points allowed)
   int threads = 0;             ///< 0 = OpenMP default
   bool diagnostics = false;    ///< fill DirectionOutput::diagnostics
+  /// Optional: told each of the direction's kProgressSteps stages, prefixed with `label`.
+  ProgressSteps* progress = nullptr;
+  std::string label;
 };
+
+/// Stages compute_direction reports: search trees, curvatures and correspondences, features.
+inline constexpr int kProgressSteps = 3;
 
 /// Per-point intermediate values, in the iterated cloud's input order (SPEC-PCQM 1.4, 1.5).
 struct PointDiagnostics {

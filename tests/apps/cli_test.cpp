@@ -185,6 +185,26 @@ TEST_F(Cli, CompareRunsEveryMetricThatApplies) {
   EXPECT_EQ(clouds.out.rfind("PCQM = ", 0), 0u) << clouds.out;
 }
 
+TEST_F(Cli, ProgressGoesToStderrOnlyWhenAskedOffATerminal) {
+  const std::string pair = cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_bothnoise.off");
+  const CliRun plain = qm3d("cmdm " + pair);  // stderr is a file here: no progress
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_EQ(plain.err, "");
+  const CliRun asked = qm3d("cmdm " + pair + " --progress");
+  ASSERT_EQ(asked.code, 0) << asked.err;
+  EXPECT_EQ(asked.out, plain.out);  // the result is untouched
+  EXPECT_NE(asked.err.find("qm3d: CMDM:   0%  connectivity"), std::string::npos) << asked.err;
+  EXPECT_NE(asked.err.find("qm3d: CMDM:  89%  ref→dist: scale 3/3"), std::string::npos) << asked.err;
+  EXPECT_NE(asked.err.find("qm3d: CMDM: 100%  done"), std::string::npos) << asked.err;
+  EXPECT_EQ(qm3d("cmdm " + pair + " --progress --quiet").err, "");
+  const CliRun compare = qm3d("compare " + pair + " --progress");
+  ASSERT_EQ(compare.code, 0) << compare.err;
+  for (const char* metric : {"CMDM", "MSDM2", "PCQM"}) {
+    EXPECT_NE(compare.err.find(std::string("qm3d: ") + metric + ": 100%  done"), std::string::npos)
+        << metric << "\n" << compare.err;
+  }
+}
+
 TEST_F(Cli, BadInputIsOneLineAndExitCode2) {
   const CliRun missing = qm3d("cmdm /nonexistent/a.obj " + cmdm_file("blob4_ref.off"));
   EXPECT_EQ(missing.code, 2);

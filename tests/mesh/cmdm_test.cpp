@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "qm3d/common/error.h"
+#include "progress_recorder.h"
 #include "qm3d/mesh/mesh_io.h"
 #include "test_paths.h"
 
@@ -141,6 +142,40 @@ TEST(Cmdm, DirectionOptionComputesOnlyWhatIsAsked) {
   EXPECT_TRUE(one.dist_to_ref);
   EXPECT_FALSE(one.ref_to_dist);
   EXPECT_EQ(one.score, result_for("monkey2.obj", "monkey_simplified.obj").dist_to_ref->score);
+}
+
+// Fractions start at 0, never decrease and end at 1; the stages name the direction and scale.
+void expect_sound_progress(const test::ProgressCalls& calls,
+                           const std::string& some_stage) {
+  ASSERT_GE(calls.size(), 2u);
+  EXPECT_EQ(calls.front().second, 0.0);
+  EXPECT_EQ(calls.back(), std::make_pair(std::string("done"), 1.0));
+  bool seen = false;
+  for (std::size_t i = 0; i < calls.size(); ++i) {
+    if (i > 0) {
+      EXPECT_LE(calls[i - 1].second, calls[i].second) << calls[i].first;
+    }
+    EXPECT_LE(calls[i].second, 1.0);
+    seen = seen || calls[i].first == some_stage;
+  }
+  EXPECT_TRUE(seen) << some_stage;
+}
+
+TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_bothnoise.off").mesh;
+  test::ProgressRecorder recorder;
+  const test::ProgressCalls& calls = recorder.calls;
+  CmdmOptions o;
+  o.progress = recorder.callback();
+  const MeshMetricResult with = compute_cmdm(r, d, o);
+  expect_sound_progress(calls, "ref→dist: scale 3/3");
+  EXPECT_EQ(calls.size(), 2u + 2 * 3 + 1);  // connectivity, matching, 2 x 3 scales, done
+  EXPECT_EQ(with.score, compute_cmdm(r, d).score);
+  recorder.calls.clear();
+  o.direction = Direction::kDistToRef;
+  compute_cmdm(r, d, o);
+  expect_sound_progress(calls, "dist→ref: closest points");
 }
 
 TEST(Cmdm, ScoreGrowsWithColourNoise) {

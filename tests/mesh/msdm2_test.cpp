@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "progress_recorder.h"
 #include "qm3d/mesh/mesh_io.h"
 #include "test_paths.h"
 
@@ -50,9 +51,15 @@ TEST(Msdm2, IdenticalMeshesGiveZero) {
   EXPECT_TRUE(m.dist_to_ref && m.ref_to_dist);
 }
 
-TEST(Msdm2, IgnoresColourAndWorksWithoutIt) {
-  auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
-  auto d = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
+// blob4_ref and its geometric-noise version.
+class Msdm2Blob4 : public ::testing::Test {
+ protected:
+  ColoredMesh ref_ = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  ColoredMesh geonoise_ = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
+};
+
+TEST_F(Msdm2Blob4, IgnoresColourAndWorksWithoutIt) {
+  ColoredMesh r = ref_, d = geonoise_;
   const double with_color = compute_msdm2(r, d).score;
   r.colors.clear();
   d.colors.clear();
@@ -61,14 +68,25 @@ TEST(Msdm2, IgnoresColourAndWorksWithoutIt) {
             compute_msdm2(r, r).score);
 }
 
-TEST(Msdm2, LocalDistortionPoolsToTheScore) {
-  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
-  const auto d = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
-  const MeshMetricResult m = compute_msdm2(r, d);
+TEST_F(Msdm2Blob4, LocalDistortionPoolsToTheScore) {
+  const MeshMetricResult m = compute_msdm2(ref_, geonoise_);
   double sum = 0;
   for (double ld : m.dist_to_ref->local_distortion) sum += ld * ld * ld;
   EXPECT_NEAR(std::cbrt(sum / m.dist_to_ref->local_distortion.size()), m.score, 1e-12);
-  EXPECT_EQ(m.dist_to_ref->local_distortion.size(), d.num_vertices());
+  EXPECT_EQ(m.dist_to_ref->local_distortion.size(), geonoise_.num_vertices());
+}
+
+TEST_F(Msdm2Blob4, ReportsEachScaleOfItsDirection) {
+  test::ProgressRecorder recorder;
+  Msdm2Options o;
+  o.progress = recorder.callback();
+  EXPECT_EQ(compute_msdm2(ref_, geonoise_, o).score, compute_msdm2(ref_, geonoise_).score);
+  EXPECT_EQ(recorder.calls, (test::ProgressCalls{{"connectivity", 0.0},
+                                                 {"dist→ref: closest points", 0.2},
+                                                 {"dist→ref: scale 1/3", 0.4},
+                                                 {"dist→ref: scale 2/3", 0.6},
+                                                 {"dist→ref: scale 3/3", 0.8},
+                                                 {"done", 1.0}}));
 }
 
 }  // namespace

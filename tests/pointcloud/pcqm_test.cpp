@@ -12,6 +12,7 @@
 
 #include "pcqm_internal.h"
 #include "qm3d/common/error.h"
+#include "progress_recorder.h"
 #include "qm3d/common/pooling.h"
 #include "reference_data.h"
 #include "test_paths.h"
@@ -226,6 +227,25 @@ TEST(Pcqm, OneAndTwoThreadsGiveIdenticalBits) {
   EXPECT_EQ(one.score, two.score);
   EXPECT_EQ(one.ref_to_dist.features, two.ref_to_dist.features);
   EXPECT_EQ(one.ref_to_dist.per_point, two.ref_to_dist.per_point);
+}
+
+TEST(Pcqm, ReportsProgressWithoutChangingTheResult) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
+  const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 5000);
+  test::ProgressRecorder recorder;
+  const test::ProgressCalls& calls = recorder.calls;
+  PcqmOptions o = test_options();
+  o.symmetric = true;
+  o.progress = recorder.callback();
+  const PcqmResult with = compute_pcqm(ref, dist, o);
+  ASSERT_EQ(calls.size(), 7u);  // 3 stages per direction, then done
+  EXPECT_EQ(calls.front(), std::make_pair(std::string("ref→dist: search trees"), 0.0));
+  EXPECT_EQ(calls[3].first, "dist→ref: search trees");
+  EXPECT_DOUBLE_EQ(calls[3].second, 0.5);
+  EXPECT_EQ(calls.back(), std::make_pair(std::string("done"), 1.0));
+  for (std::size_t i = 1; i < calls.size(); ++i) EXPECT_LT(calls[i - 1].second, calls[i].second);
+  o.progress = nullptr;
+  EXPECT_EQ(compute_pcqm(ref, dist, o).score, with.score);
 }
 
 TEST(Pcqm, IdentityGivesZero) {

@@ -15,6 +15,7 @@
 
 #include "qm3d/common/features.h"
 #include "qm3d/common/pooling.h"
+#include "qm3d/common/progress.h"
 #include "qm3d/common/types.h"
 #include "qm3d/mesh/mesh_metric.h"
 
@@ -31,6 +32,8 @@ struct CmdmOptions {
   std::filesystem::path data_dir;
   /// Keep the per-vertex local distortion in the result.
   bool per_vertex = true;
+  /// Optional: told each stage as it starts (progress.h); the result does not depend on it.
+  ProgressCallback progress;
 };
 
 /// Computes CMDM between a reference and a distorted mesh. Throws NumericError for meshes the

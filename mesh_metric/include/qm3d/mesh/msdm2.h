@@ -6,6 +6,7 @@
 //   const auto r = qm3d::mesh::compute_msdm2(ref, dist);   // r.score: MEPP2's example_msdm2
 #pragma once
 
+#include "qm3d/common/progress.h"
 #include "qm3d/common/types.h"
 #include "qm3d/mesh/mesh_metric.h"
 
@@ -19,6 +20,8 @@ struct Msdm2Options {
   int scales = 3;
   /// Keep the per-vertex local distortion in the result.
   bool per_vertex = true;
+  /// Optional: told each stage as it starts (progress.h); the result does not depend on it.
+  ProgressCallback progress;
 };
 
 /// MSDM2 between a reference and a distorted mesh (colours, if any, are ignored). Per direction:

@@ -19,6 +19,7 @@
 
 #include "qm3d/common/features.h"
 #include "qm3d/common/pooling.h"
+#include "qm3d/common/progress.h"
 #include "qm3d/common/types.h"
 
 namespace qm3d::pointcloud {
@@ -55,6 +56,8 @@ struct PcqmOptions {
   bool per_point = true;
   /// Weights of F1..F8 (default: the published 0.0057 F3 + 0.9771 F4 + 0.0172 F6).
   LinearModel model = pcqm_model();
+  /// Optional: told each stage as it starts (progress.h); the result does not depend on it.
+  ProgressCallback progress;
 };
 
 /// One direction: the points of `reference` iterated, their correspondences found on the other

@@ -1,0 +1,22 @@
+// How the tool shows progress on stderr: a line rewritten in place on a terminal, one line per
+// stage otherwise (when asked for with --progress).
+#pragma once
+
+#include <string>
+
+#include "qm3d/common/progress.h"
+
+namespace qm3d::app {
+
+/// "1h2m3s", "4m5s", "6s"; "?" for a negative or non-finite time.
+std::string format_duration(double seconds);
+
+/// True when stderr is a terminal.
+bool stderr_is_terminal();
+
+/// A callback that shows `metric`'s progress on stderr with the time elapsed since its first stage.
+/// `in_place`: rewrite one line (a terminal), erased when the metric is done; otherwise print a
+/// line per stage.
+ProgressCallback stderr_progress(const std::string& metric, bool in_place);
+
+}  // namespace qm3d::app
