@@ -275,15 +275,16 @@ int run(int argc, char** argv) {
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
   msdm2.direction = parse_direction(msdm2_direction);
-  MetricOptions metrics{cmdm, msdm2, pcqm, to_sampling_options(sampling, kDefaultSampledPoints)};
   // One pair: its stages on stderr (batch shows pairs done instead).
   const bool single_pair = *cmdm_cmd || *msdm2_cmd || *pcqm_cmd || *compare_cmd;
   if (single_pair && !global.quiet && (progress || stderr_is_terminal())) {
     const bool in_place = stderr_is_terminal();
-    cmdm.progress = metrics.cmdm.progress = stderr_progress("CMDM", in_place);
-    msdm2.progress = metrics.msdm2.progress = stderr_progress("MSDM2", in_place);
-    pcqm.progress = metrics.pcqm.progress = stderr_progress("PCQM", in_place);
+    cmdm.progress = stderr_progress("CMDM", in_place);
+    msdm2.progress = stderr_progress("MSDM2", in_place);
+    pcqm.progress = stderr_progress("PCQM", in_place);
   }
+  const MetricOptions metrics{cmdm, msdm2, pcqm,
+                              to_sampling_options(sampling, kDefaultSampledPoints)};
 
   std::vector<MetricReport> reports;
   if (*cmdm_cmd) reports.push_back(run_cmdm(ref, dist, cmdm, out.map));

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <functional>
 #include <string>
+#include <utility>
 
 namespace qm3d {
 
@@ -22,8 +23,8 @@ using ProgressCallback = std::function<void(const std::string& stage, double fra
 /// to an optional callback (nothing happens when it is empty).
 class ProgressSteps {
  public:
-  ProgressSteps(const ProgressCallback& callback, int total_steps)
-      : callback_(callback), total_(std::max(total_steps, 1)) {}
+  ProgressSteps(ProgressCallback callback, int total_steps)
+      : callback_(std::move(callback)), total_(std::max(total_steps, 1)) {}
 
   /// `stage`, worth `steps` steps, starts: reports the steps done so far.
   void begin(const std::string& stage, int steps = 1) {
@@ -36,7 +37,7 @@ class ProgressSteps {
   }
 
  private:
-  const ProgressCallback& callback_;
+  ProgressCallback callback_;
   int total_;
   int started_ = 0;
 };
