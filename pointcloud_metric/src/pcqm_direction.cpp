@@ -213,19 +213,25 @@ void stage1_leaf(const std::array<std::uint32_t, 2>& leaf, const Clouds& c,
   }
 }
 
+// Calls visit(leaf, scratch) for every leaf of `tree`, in parallel, with one Scratch per thread.
+template <typename Scratch, typename Visit>
+void for_each_leaf(const KdTree& tree, int threads, Visit&& visit) {
+  const auto& leaves = tree.leaves();
+  const auto n = static_cast<std::int64_t>(leaves.size());
+#pragma omp parallel num_threads(thread_count(threads))
+  {
+    Scratch scratch;
+#pragma omp for schedule(dynamic, kLeavesPerChunk)
+    for (std::int64_t l = 0; l < n; ++l) visit(leaves[std::size_t(l)], scratch);
+  }
+}
+
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
                  const Lab2000hlTable& table) {
-  const auto& leaves = c.ref_tree.leaves();
-  const auto n = static_cast<std::int64_t>(leaves.size());
   PointData out(c.ref_tree.size(), params.diagnostics);
-#pragma omp parallel num_threads(thread_count(params.threads))
-  {
-    Stage1Scratch scratch;
-#pragma omp for schedule(dynamic, kLeavesPerChunk)
-    for (std::int64_t l = 0; l < n; ++l) {
-      stage1_leaf(leaves[std::size_t(l)], c, params, radii, table, scratch, out);
-    }
-  }
+  for_each_leaf<Stage1Scratch>(c.ref_tree, params.threads, [&](const auto& leaf, auto& scratch) {
+    stage1_leaf(leaf, c, params, radii, table, scratch, out);
+  });
   return out;
 }
 
@@ -281,17 +287,10 @@ void stage2_leaf(const std::array<std::uint32_t, 2>& leaf, const KdTree& ref_tre
 std::vector<FeatureVector> stage2(const KdTree& ref_tree, const PointData& d,
                                   const DirectionParams& params, const Radii& radii,
                                   std::vector<std::uint32_t>* counts) {
-  const auto& leaves = ref_tree.leaves();
-  const auto n = static_cast<std::int64_t>(leaves.size());
   std::vector<FeatureVector> features(ref_tree.size());
-#pragma omp parallel num_threads(thread_count(params.threads))
-  {
-    Stage2Scratch scratch;
-#pragma omp for schedule(dynamic, kLeavesPerChunk)
-    for (std::int64_t l = 0; l < n; ++l) {
-      stage2_leaf(leaves[std::size_t(l)], ref_tree, d, radii, scratch, features, counts);
-    }
-  }
+  for_each_leaf<Stage2Scratch>(ref_tree, params.threads, [&](const auto& leaf, auto& scratch) {
+    stage2_leaf(leaf, ref_tree, d, radii, scratch, features, counts);
+  });
   return features;
 }
 
