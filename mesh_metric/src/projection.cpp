@@ -18,6 +18,8 @@ using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
 using Triangle3 = Kernel::Triangle_3;
 
+Point to_point(const Vec3& p) { return Point(p[0], p[1], p[2]); }
+
 // Property maps that build a face's triangle and reference point from our arrays on demand, so
 // the AABB tree stores only face indices (no copy of the mesh).
 struct FaceTriangleMap {
@@ -29,9 +31,7 @@ struct FaceTriangleMap {
   friend Triangle3 get(const FaceTriangleMap& m, std::uint32_t f) {
     const auto& t = m.mesh->triangles[f];
     const auto& p = m.mesh->positions;
-    return Triangle3(Point(p[t[0]][0], p[t[0]][1], p[t[0]][2]),
-                     Point(p[t[1]][0], p[t[1]][1], p[t[1]][2]),
-                     Point(p[t[2]][0], p[t[2]][1], p[t[2]][2]));
+    return Triangle3(to_point(p[t[0]]), to_point(p[t[1]]), to_point(p[t[2]]));
   }
 };
 
@@ -42,8 +42,7 @@ struct FacePointMap {
   using reference = Point;
   using category = boost::readable_property_map_tag;
   friend Point get(const FacePointMap& m, std::uint32_t f) {
-    const auto& p = m.mesh->positions[m.mesh->triangles[f][0]];
-    return Point(p[0], p[1], p[2]);
+    return to_point(m.mesh->positions[m.mesh->triangles[f][0]]);
   }
 };
 
@@ -90,8 +89,7 @@ void add_search_hints(Tree& tree, const HalfedgeMesh& target, HeronAnchor anchor
     if (vertex_face[v] >= 0) hinted.push_back(v);
   }
   const auto to_hint = [&](std::uint32_t v) {
-    const Vec3& p = target.positions[v];
-    return Tree::Point_and_primitive_id(Point(p[0], p[1], p[2]),
+    return Tree::Point_and_primitive_id(to_point(target.positions[v]),
                                         static_cast<std::uint32_t>(vertex_face[v]));
   };
   tree.accelerate_distance_queries(boost::make_transform_iterator(hinted.begin(), to_hint),
@@ -115,7 +113,7 @@ SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries,
   out.matches.resize(queries.size());
   auto match_one = [&](std::size_t i) {
     const Vec3& v = queries[i];
-    const auto pp = tree.closest_point_and_primitive(Point(v[0], v[1], v[2]));
+    const auto pp = tree.closest_point_and_primitive(to_point(v));
     Vec3& point = out.points[i];
     point = {pp.first.x(), pp.first.y(), pp.first.z()};
     SurfaceMatch& m = out.matches[i];
