@@ -14,6 +14,7 @@ namespace qm3d::mesh {
 namespace {
 
 using detail::LineReader;
+using detail::Statements;
 using detail::Tokens;
 
 // What a reader extracts before validation: positions, raw colour values (per vertex, maybe
@@ -67,12 +68,11 @@ std::uint32_t obj_index(std::string_view tok, std::size_t num_vertices, const st
 
 RawMesh parse_obj(const std::string& text, const std::string& file) {
   RawMesh m;
-  LineReader lines(text);
-  std::string_view line, tok;
-  while (lines.next(line)) {
-    Tokens tokens(line);
-    tokens.next(tok);
-    if (tok == "v") {
+  Statements lines(text);
+  std::string_view keyword, tok;
+  Tokens tokens;
+  while (lines.next(keyword, tokens)) {
+    if (keyword == "v") {
       double v[7];
       int n = 0;
       while (n < 7 && tokens.next(tok)) {
@@ -87,7 +87,7 @@ RawMesh parse_obj(const std::string& text, const std::string& file) {
       check_finite(m.positions.back(), m.positions.size() - 1, file);
       // `v x y z r g b` (MEPP2's convention); `v x y z w` carries no colour.
       m.colors.push_back(n >= 6 ? std::optional<Rgb>(Rgb{v[3], v[4], v[5]}) : std::nullopt);
-    } else if (tok == "f") {
+    } else if (keyword == "f") {
       while (tokens.next(tok)) {
         m.face_indices.push_back(obj_index(tok, m.positions.size(), file, lines.line_number()));
       }

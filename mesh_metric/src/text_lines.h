@@ -1,4 +1,4 @@
-// Line and number scanning for the text mesh formats (OBJ, OFF). Internal.
+// Line, statement and number scanning for the text mesh formats (OBJ, MTL, OFF). Internal.
 #pragma once
 
 #include <charconv>
@@ -40,6 +40,7 @@ class LineReader {
 /// Splits a line into whitespace-separated tokens, one at a time.
 class Tokens {
  public:
+  Tokens() = default;
   explicit Tokens(std::string_view line) : line_(line) {}
 
   bool next(std::string_view& token) {
@@ -55,6 +56,27 @@ class Tokens {
  private:
   std::string_view line_;
   std::size_t pos_ = 0;
+};
+
+/// The statements of a keyword-led format (OBJ, MTL): for each line that is not blank, its first
+/// token and the tokens after it.
+class Statements {
+ public:
+  explicit Statements(std::string_view text) : lines_(text) {}
+
+  /// Next statement; false at the end.
+  bool next(std::string_view& keyword, Tokens& arguments) {
+    std::string_view line;
+    if (!lines_.next(line)) return false;
+    arguments = Tokens(line);
+    arguments.next(keyword);  // the line is not blank: there is a first token
+    return true;
+  }
+
+  std::size_t line_number() const { return lines_.line_number(); }
+
+ private:
+  LineReader lines_;
 };
 
 /// Parses a whole token as a double; false when it is not a number.

@@ -16,7 +16,7 @@
 namespace qm3d::mesh {
 namespace {
 
-using detail::LineReader;
+using detail::Statements;
 using detail::Tokens;
 
 constexpr int kRgbChannels = 3;
@@ -82,22 +82,21 @@ Uv read_uv(Tokens& tokens, const std::string& file, std::size_t line) {
 ObjTexturing parse_obj_texturing(const std::string& text, const std::string& file) {
   ObjTexturing t;
   std::string current_material;
-  LineReader lines(text);
-  std::string_view line, tok;
-  while (lines.next(line)) {
-    Tokens tokens(line);
-    tokens.next(tok);
-    if (tok == "vt") {
+  Statements lines(text);
+  std::string_view keyword, tok;
+  Tokens tokens;
+  while (lines.next(keyword, tokens)) {
+    if (keyword == "vt") {
       t.uvs.push_back(read_uv(tokens, file, lines.line_number()));
-    } else if (tok == "f") {
+    } else if (keyword == "f") {
       while (tokens.next(tok)) {
         t.corner_uvs.push_back(corner_uv(tok, t.uvs.size(), file, lines.line_number()));
       }
       t.polygon_offsets.push_back(static_cast<std::uint32_t>(t.corner_uvs.size()));
       t.polygon_materials.push_back(current_material);
-    } else if (tok == "usemtl") {
+    } else if (keyword == "usemtl") {
       current_material = tokens.next(tok) ? std::string(tok) : "";
-    } else if (tok == "mtllib") {
+    } else if (keyword == "mtllib") {
       while (tokens.next(tok)) t.mtllibs.emplace_back(tok);
     }
   }
@@ -125,16 +124,15 @@ std::map<std::string, Material> read_mtl(const std::filesystem::path& path) {
   const std::string text = read_file_bytes(path);
   std::map<std::string, Material> materials;
   Material* current = nullptr;
-  LineReader lines(text);
-  std::string_view line, tok;
-  while (lines.next(line)) {
-    Tokens tokens(line);
-    tokens.next(tok);
-    if (tok == "newmtl") {
+  Statements lines(text);
+  std::string_view keyword, tok;
+  Tokens tokens;
+  while (lines.next(keyword, tokens)) {
+    if (keyword == "newmtl") {
       current = &materials[tokens.next(tok) ? std::string(tok) : ""];
-    } else if (current && tok == "Kd") {
+    } else if (current && keyword == "Kd") {
       read_kd(tokens, *current, path.string(), lines.line_number());
-    } else if (current && tok == "map_Kd") {
+    } else if (current && keyword == "map_Kd") {
       std::string_view last;
       while (tokens.next(tok)) last = tok;
       if (last.empty()) fail(path.string(), at_line(lines.line_number()) + "map_Kd names no file");
@@ -263,13 +261,12 @@ Rgb sample_texture(const TextureImage& image, const Uv& uv) {
 bool obj_is_textured(const std::string& obj_text) {
   constexpr int kColoredVertexNumbers = 6;
   bool mtllib = false;
-  LineReader lines(obj_text);
-  std::string_view line, tok;
-  while (lines.next(line)) {
-    Tokens tokens(line);
-    tokens.next(tok);
-    if (tok == "mtllib") mtllib = true;
-    if (tok != "v") continue;
+  Statements lines(obj_text);
+  std::string_view keyword, tok;
+  Tokens tokens;
+  while (lines.next(keyword, tokens)) {
+    if (keyword == "mtllib") mtllib = true;
+    if (keyword != "v") continue;
     int n = 0;
     while (tokens.next(tok)) ++n;
     if (n >= kColoredVertexNumbers) return false;
