@@ -312,19 +312,22 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using namespace qm3d::app;
+  // One line on stderr (after erasing a progress line on a terminal), then the exit code. No
+  // std::string is built, so this also works when memory ran out.
+  const auto fail = [](const char* kind, const char* what, int code) {
+    clear_progress_line();
+    std::cerr << "qm3d: " << kind << ": " << what << "\n";
+    return code;
+  };
   try {
     return run(argc, argv);
   } catch (const qm3d::Error& e) {
-    std::cerr << "qm3d: error: " << e.what() << "\n";
-    return kExitBadInput;
+    return fail("error", e.what(), kExitBadInput);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "qm3d: error: " << e.what() << "\n";
-    return kExitUsage;
+    return fail("error", e.what(), kExitUsage);
   } catch (const std::bad_alloc&) {
-    std::cerr << "qm3d: error: out of memory\n";
-    return kExitInternal;
+    return fail("error", "out of memory", kExitInternal);
   } catch (const std::exception& e) {
-    std::cerr << "qm3d: internal error: " << e.what() << "\n";
-    return kExitInternal;
+    return fail("internal error", e.what(), kExitInternal);
   }
 }

@@ -22,6 +22,10 @@ std::string format_duration(double s) {
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
 
+void clear_progress_line() {
+  if (stderr_is_terminal()) std::cerr << "\r\033[K";
+}
+
 ProgressCallback stderr_progress(const std::string& metric, bool in_place) {
   using Clock = std::chrono::steady_clock;
   return [metric, in_place, start = Clock::time_point{}](const std::string& stage,

@@ -14,6 +14,10 @@ std::string format_duration(double seconds);
 /// True when stderr is a terminal.
 bool stderr_is_terminal();
 
+/// On a terminal, erases the stderr line a progress line may stand on (before an error message);
+/// nothing otherwise.
+void clear_progress_line();
+
 /// A callback that shows `metric`'s progress on stderr with the time elapsed since its first stage.
 /// `in_place`: rewrite one line (a terminal), erased when the metric is done; otherwise print a
 /// line per stage.

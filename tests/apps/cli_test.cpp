@@ -205,6 +205,33 @@ TEST_F(Cli, ProgressGoesToStderrOnlyWhenAskedOffATerminal) {
   }
 }
 
+// On a terminal (script(1) provides one) the progress line is rewritten in place and erased
+// before the score or an error message is printed.
+TEST_F(Cli, ProgressLineOnATerminalIsErasedBeforeTheResultOrAnError) {
+  if (!fs::exists("/usr/bin/script")) GTEST_SKIP() << "script(1) (bsdutils) is not installed";
+  const auto on_terminal = [&](const std::string& args) {
+    const fs::path log = dir_ / "io" / "terminal";
+    const std::string cmd = "cd '" + (dir_ / "cwd").string() + "' && /usr/bin/timeout 120 script -qec \"'" +
+                            std::string(QM3D_BINARY) + "' " + args + "\" /dev/null > '" + log.string() + "'";
+    const int status = std::system(cmd.c_str());
+    return std::make_pair(WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(log));
+  };
+  const std::string erase = "\r\033[K";
+  const auto [ok_code, ok] = on_terminal("msdm2 " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_geonoise.off"));
+  ASSERT_EQ(ok_code, 0) << ok;
+  EXPECT_NE(ok.find("\rMSDM2:  40%  dist→ref: scale 1/3"), std::string::npos) << ok;
+  ASSERT_NE(ok.rfind(erase), std::string::npos) << ok;
+  EXPECT_EQ(ok.substr(ok.rfind(erase) + erase.size()), "MSDM2 = 0.494504  (dist→ref)\r\n");
+
+  const fs::path flat = dir_ / "io" / "flat.off";
+  std::ofstream(flat) << "OFF\n3 1 0\n1 1 1\n1 1 1\n1 1 1\n3 0 1 2\n";
+  const auto [bad_code, bad] = on_terminal("msdm2 " + flat.string() + " " + flat.string());
+  EXPECT_EQ(bad_code, 2) << bad;
+  ASSERT_NE(bad.find("MSDM2:   0%  connectivity"), std::string::npos) << bad;
+  ASSERT_NE(bad.rfind(erase), std::string::npos) << bad;
+  EXPECT_EQ(bad.substr(bad.rfind(erase) + erase.size()).rfind("qm3d: error: distorted mesh: bounding box has zero size", 0), 0u) << bad;
+}
+
 TEST_F(Cli, BadInputIsOneLineAndExitCode2) {
   const CliRun missing = qm3d("cmdm /nonexistent/a.obj " + cmdm_file("blob4_ref.off"));
   EXPECT_EQ(missing.code, 2);
