@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -333,6 +334,14 @@ int face_list_property(const Element& e) {
   return -1;
 }
 
+// An integral value read from the file, written in full: an ASCII file can hold any number of
+// digits, which no integer type holds.
+std::string integer_text(double v) {
+  char text[400];  // enough for every finite double with %.0f
+  std::snprintf(text, sizeof text, "%.0f", v);
+  return text;
+}
+
 void read_faces(Cursor& cur, const Element& e, const std::string& name, Content& out) {
   const int list = face_list_property(e);
   out.face_offsets.assign(1, 0);
@@ -354,7 +363,7 @@ void read_faces(Cursor& cur, const Element& e, const std::string& name, Content&
         const double idx = cur.value(p.type);
         if (static_cast<int>(k) != list) continue;
         if (idx < 0 || idx >= num_vertices) {
-          fail(name, where + " refers to vertex " + std::to_string(static_cast<long long>(idx)) +
+          fail(name, where + " refers to vertex " + integer_text(idx) +
                          ", but there are " + std::to_string(out.positions.size()) + " vertices");
         }
         out.face_indices.push_back(static_cast<std::uint32_t>(idx));

@@ -183,6 +183,14 @@ TEST(Ply, MalformedInputsAreNamedErrors) {
             std::string::npos);
   b.faces = {{0, -1, 2}};
   EXPECT_NE(error_of(b.bytes()).find("face 0 refers to vertex -1"), std::string::npos);
+  // An ASCII index beyond every integer type is reported in full (the fuzzer found it being
+  // converted to long long, which is undefined).
+  const std::string huge_index =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n3 0 1 22222222222222222222222222222222222\n";
+  EXPECT_NE(error_of(huge_index).find("face 0 refers to vertex 222222222222222"), std::string::npos)
+      << error_of(huge_index);
 
   b = triangle();
   bytes = b.bytes();
