@@ -57,24 +57,41 @@ FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureCon
   return f;
 }
 
-FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+FeatureVector color_similarities(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
   const PairedMoments light =
       weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance);
   const PairedMoments structure =
       conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
-  FeatureVector f{};
-  f[3] = 1.0 - lightness_similarity(light.mean1, light.mean2);
-  f[4] = 1.0 - lightness_contrast_similarity(light.sd1, light.sd2);
-  f[5] = 1.0 - lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
-  f[6] = 1.0 - chroma_similarity(weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2));
-  f[7] = 1.0 - hue_similarity(weighted_mean(s.hue_diff, s.w1));
+  FeatureVector sim{};
+  sim[3] = lightness_similarity(light.mean1, light.mean2);
+  sim[4] = lightness_contrast_similarity(light.sd1, light.sd2);
+  sim[5] = lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
+  sim[6] = chroma_similarity(weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2));
+  sim[7] = hue_similarity(weighted_mean(s.hue_diff, s.w1));
+  return sim;
+}
+
+void similarities_to_features(FeatureVector& v) {
+  for (std::size_t k = 3; k < kNumFeatures; ++k) v[k] = 1.0 - v[k];
+}
+
+FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  FeatureVector f = color_similarities(s, conv);
+  similarities_to_features(f);
+  return f;
+}
+
+FeatureVector local_features_and_similarities(const NeighbourhoodSamples& s,
+                                              const FeatureConventions& conv) {
+  FeatureVector f = curvature_features(s, conv);
+  const FeatureVector sim = color_similarities(s, conv);
+  for (std::size_t k = 3; k < kNumFeatures; ++k) f[k] = sim[k];
   return f;
 }
 
 FeatureVector local_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
-  FeatureVector f = curvature_features(s, conv);
-  const FeatureVector c = color_features(s, conv);
-  for (std::size_t k = 3; k < kNumFeatures; ++k) f[k] = c[k];
+  FeatureVector f = local_features_and_similarities(s, conv);
+  similarities_to_features(f);
   return f;
 }
 

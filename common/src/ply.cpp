@@ -108,8 +108,14 @@ std::uint64_t min_record_bytes(const Element& e, Format format) {
 // Sequential reader of the data section, ASCII (line per record) or binary.
 class Cursor {
  public:
-  Cursor(const std::string& bytes, std::size_t offset, Format format, const std::string& name)
-      : data_(bytes.data()), size_(bytes.size()), pos_(offset), format_(format), name_(name) {}
+  Cursor(const std::string& bytes, std::size_t offset, Format format, AsciiFloat ascii_float,
+         const std::string& name)
+      : data_(bytes.data()),
+        size_(bytes.size()),
+        pos_(offset),
+        format_(format),
+        float32_(ascii_float == AsciiFloat::kAsDeclared),
+        name_(name) {}
 
   void begin_record(const std::string& where) {
     where_ = &where;
@@ -158,7 +164,9 @@ class Cursor {
     while (end < line_end_ && data_[end] != ' ' && data_[end] != '\t' && data_[end] != '\r') ++end;
     token_.assign(data_ + pos_, end - pos_);
     char* stop = nullptr;
-    const double v = std::strtod(token_.c_str(), &stop);
+    const double v = float32_ && t == ScalarType::kFloat32
+                         ? static_cast<double>(std::strtof(token_.c_str(), &stop))
+                         : std::strtod(token_.c_str(), &stop);
     if (stop != token_.c_str() + token_.size() || token_.empty()) {
       fail(name_, *where_ + ": '" + token_ + "' is not a number");
     }
@@ -209,6 +217,7 @@ class Cursor {
   std::size_t pos_;
   std::size_t line_end_ = 0;
   Format format_;
+  bool float32_;  // ASCII `float` values parsed as float32
   const std::string& name_;
   const std::string* where_ = nullptr;
   std::string token_;
@@ -464,10 +473,10 @@ Header parse_header(const std::string& bytes, const std::string& name) {
   return h;
 }
 
-Content parse(const std::string& bytes, const std::string& name) {
+Content parse(const std::string& bytes, const std::string& name, AsciiFloat ascii_float) {
   const Header h = parse_header(bytes, name);
   Content out;
-  Cursor cur(bytes, h.data_offset, h.format, name);
+  Cursor cur(bytes, h.data_offset, h.format, ascii_float, name);
   bool have_vertices = false;
   for (const auto& e : h.elements) {
     if (e.name == "vertex" && !have_vertices) {
@@ -487,8 +496,8 @@ Content parse(const std::string& bytes, const std::string& name) {
   return out;
 }
 
-Content read(const std::filesystem::path& path) {
-  return parse(read_file_bytes(path), path.string());
+Content read(const std::filesystem::path& path, AsciiFloat ascii_float) {
+  return parse(read_file_bytes(path), path.string(), ascii_float);
 }
 
 namespace {

@@ -28,6 +28,13 @@ FeatureVector mean_features(const std::vector<FeatureVector>& per_element) {
   return sum;
 }
 
+FeatureVector mean_features_from_similarities(const std::vector<FeatureVector>& per_element) {
+  if (per_element.empty()) return FeatureVector{};
+  FeatureVector pooled = mean_features(per_element);
+  similarities_to_features(pooled);
+  return pooled;
+}
+
 double LinearModel::apply(const FeatureVector& features) const {
   double score = 0;
   for (std::size_t k = 0; k < kNumFeatures; ++k) {

@@ -72,50 +72,18 @@ void CandidateSet::radius(const Vec3& q, double radius2, std::vector<Neighbour>&
   select<true>(radius2, out);
 }
 
-double CandidateSet::knn_radius(const Vec3& q, std::size_t k, double knn_bound2, double radius2,
-                                std::vector<Neighbour>& nearest, std::vector<Neighbour>& within) {
+CandidateSet::Knn CandidateSet::knn(const Vec3& q, std::size_t k, double knn_bound2,
+                                    std::vector<Neighbour>& nearest) {
   distances(q);
-  select<false>(std::max(knn_bound2, radius2), survivors_);
-  split_at_radius(radius2, within);
-  sort_by_distance(within);
-  // In (distance, index) order the k nearest are the sorted radius neighbours followed by the
-  // nearest of the others. Candidates come in index order, so this is what inserting them one
-  // by one after any equal distance keeps (nanoflann KNNResultSet::addPoint).
+  select<false>(knn_bound2, survivors_);
+  sort_by_distance(survivors_);
   k = std::min(k, survivors_.size());
-  nearest.assign(within.begin(), within.begin() + long(std::min(k, within.size())));
-  for (const Neighbour& nb : outside_) {
-    if (nearest.size() == k) {
-      if (!(nb.distance2 < nearest.back().distance2)) continue;
-    } else {
-      nearest.push_back(nb);
-    }
-    std::size_t i = nearest.size() - 1;
-    while (i > 0 && nearest[i - 1].distance2 > nb.distance2) {
-      nearest[i] = nearest[i - 1];
-      --i;
-    }
-    nearest[i] = nb;
-  }
-  return k == 0 ? 0.0 : nearest.back().distance2;
-}
-
-// Splits the survivors, keeping their order, into those strictly within the radius (`within`)
-// and the others (outside_), branch-free.
-void CandidateSet::split_at_radius(double radius2, std::vector<Neighbour>& within) {
-  const std::size_t n = survivors_.size();
-  within.resize(n + 1);
-  outside_.resize(n + 1);
-  std::size_t in = 0;
-  std::size_t out = 0;
-  for (const Neighbour& nb : survivors_) {
-    const bool inside = nb.distance2 < radius2;
-    within[in] = nb;
-    outside_[out] = nb;
-    in += inside;
-    out += !inside;
-  }
-  within.resize(in);
-  outside_.resize(out);
+  nearest.assign(survivors_.begin(), survivors_.begin() + long(k));
+  Knn out;
+  if (k == 0) return out;
+  out.kth_distance2 = nearest.back().distance2;
+  out.tie_at_kth = survivors_.size() > k && survivors_[k].distance2 == out.kth_distance2;
+  return out;
 }
 
 }  // namespace qm3d::pointcloud::detail

@@ -25,17 +25,24 @@ class CandidateSet {
   /// Gathers every point of `tree` within sqrt(radius2) of `box`.
   void gather(const KdTree& tree, const Box& box, double radius2);
 
-  /// Candidates strictly within sqrt(radius2) of q, in tree order. Exact (equal to
-  /// tree.radius_search) when q lies in the gathered box and radius2 <= the gathered radius2.
+  /// Candidates strictly within sqrt(radius2) of q, in tree order. Exact (the set
+  /// tree.radius_search returns) when q lies in the gathered box and radius2 <= the gathered
+  /// radius2.
   void radius(const Vec3& q, double radius2, std::vector<Neighbour>& out);
 
-  /// The k nearest candidates and those strictly within sqrt(radius2), both sorted by
-  /// (distance, index); returns the k-th squared distance (0 when k = 0). Only candidates
-  /// within sqrt(knn_bound2) are ranked. Exact (the tree's kNN, ties broken by index) when q
-  /// lies in the box, radius2 <= the gathered radius2, and q's k-th nearest distance in the
-  /// tree is at most both sqrt(knn_bound2) and the gathered radius.
-  double knn_radius(const Vec3& q, std::size_t k, double knn_bound2, double radius2,
-                    std::vector<Neighbour>& nearest, std::vector<Neighbour>& within);
+  /// What knn found besides its list.
+  struct Knn {
+    double kth_distance2 = 0;  ///< the k-th nearest squared distance (0 when k = 0)
+    /// Another candidate ties the k-th distance: which of them is kept depends on the search
+    /// order (KdTree::knn_search decides as the reference does).
+    bool tie_at_kth = false;
+  };
+
+  /// The k nearest candidates sorted by (distance, index). Only candidates within
+  /// sqrt(knn_bound2) are ranked. Exact (the tree's kNN up to the order of equal distances)
+  /// when q lies in the box and q's k-th nearest distance in the tree is at most both
+  /// sqrt(knn_bound2) and the gathered radius.
+  Knn knn(const Vec3& q, std::size_t k, double knn_bound2, std::vector<Neighbour>& nearest);
 
   std::size_t size() const { return index_.size(); }
 
@@ -43,12 +50,11 @@ class CandidateSet {
   void distances(const Vec3& q);
   template <bool kStrict>
   std::size_t select(double bound2, std::vector<Neighbour>& out) const;
-  void split_at_radius(double radius2, std::vector<Neighbour>& within);
 
   std::vector<std::uint32_t> index_;
   std::vector<double> x_, y_, z_;  // candidate coordinates, structure of arrays
   std::vector<double> d2_;         // squared distances to the current query
-  std::vector<Neighbour> survivors_, outside_;
+  std::vector<Neighbour> survivors_;
 };
 
 }  // namespace qm3d::pointcloud::detail

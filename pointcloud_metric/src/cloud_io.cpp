@@ -35,7 +35,8 @@ FormatError no_colours(const std::filesystem::path& path, const std::string& exp
 }
 
 ColoredCloud read_ply(const std::filesystem::path& path) {
-  ply::Content content = ply::read(path);
+  // ASCII `float` values as float32, as the reference's tinyply reads them (SPEC-PCQM §9.1).
+  ply::Content content = ply::read(path, ply::AsciiFloat::kAsDeclared);
   if (content.colors.empty()) {
     throw no_colours(path, "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties");
   }

@@ -3,43 +3,24 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <array>
 #include <limits>
-#include <map>
 #include <stdexcept>
 #include <string>
 
 namespace qm3d::pointcloud::detail {
 namespace {
 
-/// Points per leaf: of 8, 12, 16, 24 and 32, 16 and 32 were fastest (within noise) on the 1M and
-/// 2M benchmark spheres (bench_pcqm, one thread); nanoflann's default is 10.
-constexpr std::size_t kLeafSize = 16;
 /// Lists up to this size are insertion-sorted (about 20% faster than std::sort at 32 elements).
 constexpr std::size_t kInsertionSortMax = 64;
 /// Subtrees larger than this are built as separate OpenMP tasks.
 constexpr std::size_t kTaskThreshold = 1 << 15;
-/// Cells are pruned only when their lower-bound distance exceeds the bound by this factor, so
-/// that rounding in the incremental bound can never drop a point the exact leaf test would keep.
+/// box_search prunes a cell only when its lower-bound distance exceeds the bound by this factor,
+/// so that rounding in the incremental bound can never drop a point the exact test would keep.
 constexpr double kPruneSlack = 1.0 + 1e-9;
-
-// Number of nodes of a subtree of n points (median halving until kLeafSize), memoised: at each
-// depth there are at most two distinct subtree sizes.
-std::size_t node_count(std::size_t n, std::map<std::size_t, std::size_t>& memo) {
-  if (n <= kLeafSize) return 1;
-  auto it = memo.find(n);
-  if (it != memo.end()) return it->second;
-  const std::size_t count = 1 + node_count(n / 2, memo) + node_count(n - n / 2, memo);
-  memo.emplace(n, count);
-  return count;
-}
+/// middleSplit_'s EPS: a dim qualifies when its span exceeds (1 - EPS) of the largest span.
+constexpr double kSpanEps = 0.00001;
 
 }  // namespace
-
-struct KdTree::Item {
-  Vec3 position;
-  std::uint32_t input_index;
-};
 
 void sort_by_distance(std::vector<Neighbour>& neighbours) {
   const auto closer = [](const Neighbour& a, const Neighbour& b) {
@@ -57,36 +38,47 @@ void sort_by_distance(std::vector<Neighbour>& neighbours) {
   }
 }
 
+bool has_ties(const std::vector<Neighbour>& sorted) {
+  for (std::size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i].distance2 == sorted[i - 1].distance2) return true;
+  }
+  return false;
+}
+
 KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
   if (points.size() >= std::numeric_limits<std::uint32_t>::max()) {
     throw std::length_error("k-d tree: too many points (" + std::to_string(points.size()) + ")");
   }
-  std::vector<Item> items(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    items[i] = Item{points[i], static_cast<std::uint32_t>(i)};
+  if (points.empty()) return;
+  // nanoflann's vind, initially the input order; computeBoundingBox: the tight box.
+  std::vector<std::uint32_t> order(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+  for (int a = 0; a < 3; ++a) root_box_[a] = {points[0][a], points[0][a]};
+  for (const Vec3& p : points) {
+    for (int a = 0; a < 3; ++a) {
+      if (p[a] < root_box_[a][0]) root_box_[a][0] = p[a];
+      if (p[a] > root_box_[a][1]) root_box_[a][1] = p[a];
+    }
   }
-  std::map<std::size_t, std::size_t> subtree_nodes;
-  nodes_.resize(points.empty() ? 0 : node_count(points.size(), subtree_nodes));
-  if (!points.empty()) {
+  input_ = &points;
+  Bounds box = root_box_;
+  nodes_.reserve(points.size() / 3);
 #pragma omp parallel num_threads( \
     threads > 0 ? threads         \
-                : omp_get_max_threads()) if (!omp_in_parallel() && items.size() > kTaskThreshold)
+                : omp_get_max_threads()) if (!omp_in_parallel() && points.size() > kTaskThreshold)
 #pragma omp single
-    build(items, 0, items.size(), 0, subtree_nodes);
-  }
-  points_.resize(items.size());
-  input_index_.resize(items.size());
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    points_[i] = items[i].position;
-    input_index_[i] = items[i].input_index;
-  }
+  build(order, 0, points.size(), box, nodes_);
+  input_ = nullptr;
+  points_.resize(points.size());
+  input_index_ = std::move(order);
+  for (std::size_t i = 0; i < points_.size(); ++i) points_[i] = points[input_index_[i]];
   index_leaves();
 }
 
 void KdTree::index_leaves() {
   for (Node& node : nodes_) {  // pre-order: leaves come in tree order
-    if (node.axis != kLeaf) continue;
-    node.leaf = static_cast<std::uint32_t>(leaves_.size());
+    if (node.divfeat != kLeaf) continue;
+    node.child2 = static_cast<std::uint32_t>(leaves_.size());
     leaves_.push_back({node.first, node.last});
     std::array<Vec3, 2> box{points_[node.first], points_[node.first]};
     for (std::uint32_t i = node.first + 1; i < node.last; ++i) {
@@ -99,99 +91,218 @@ void KdTree::index_leaves() {
   }
 }
 
-// Builds the subtree of items [begin, end) at nodes_[node] (pre-order: left child = node + 1).
-void KdTree::build(std::vector<Item>& items, std::size_t begin, std::size_t end, std::size_t node,
-                   const std::map<std::size_t, std::size_t>& subtree_nodes) {
-  const std::size_t n = end - begin;
-  if (n <= kLeafSize) {
-    nodes_[node] = Node{0, kLeaf, std::uint32_t(begin), std::uint32_t(end)};
+// nanoflann 1.1.7 divideTree / middleSplit_ / planeSplit over order[left, right), appending the
+// subtree to `out` in pre-order (first child = next node). On entry `box` is the inherited box;
+// on return it is the tight box of the subtree's points.
+void KdTree::build(std::vector<std::uint32_t>& order, std::size_t left, std::size_t right,
+                   Bounds& box, std::vector<Node>& out) const {
+  const std::vector<Vec3>& p = *input_;
+  const std::size_t self = out.size();
+  out.emplace_back();
+  if (right - left <= kLeafSize) {
+    out[self].divfeat = kLeaf;
+    out[self].first = static_cast<std::uint32_t>(left);
+    out[self].last = static_cast<std::uint32_t>(right);
+    for (int a = 0; a < 3; ++a) box[a] = {p[order[left]][a], p[order[left]][a]};
+    for (std::size_t k = left + 1; k < right; ++k) {
+      for (int a = 0; a < 3; ++a) {
+        if (box[a][0] > p[order[k]][a]) box[a][0] = p[order[k]][a];
+        if (box[a][1] < p[order[k]][a]) box[a][1] = p[order[k]][a];
+      }
+    }
     return;
   }
-  Vec3 lo = items[begin].position;
-  Vec3 hi = lo;
-  for (std::size_t i = begin + 1; i < end; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], items[i].position[a]);
-      hi[a] = std::max(hi[a], items[i].position[a]);
+  std::uint32_t* ind = order.data() + left;
+  const std::size_t count = right - left;
+  const auto min_max = [&](int axis) {
+    std::array<double, 2> r{p[ind[0]][axis], p[ind[0]][axis]};
+    for (std::size_t i = 1; i < count; ++i) {
+      const double v = p[ind[i]][axis];
+      if (v < r[0]) r[0] = v;
+      if (v > r[1]) r[1] = v;
+    }
+    return r;
+  };
+
+  // middleSplit_: the spread is measured along the dim chosen so far, not along the candidate.
+  double max_span = box[0][1] - box[0][0];
+  for (int a = 1; a < 3; ++a) max_span = std::max(max_span, box[a][1] - box[a][0]);
+  double max_spread = -1;
+  int cut = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (box[a][1] - box[a][0] > (1 - kSpanEps) * max_span) {
+      const auto range = min_max(cut);
+      const double spread = range[1] - range[0];
+      if (spread > max_spread) {
+        cut = a;
+        max_spread = spread;
+      }
     }
   }
-  std::uint32_t axis = 0;
-  for (std::uint32_t a = 1; a < 3; ++a) {
-    if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
-  }
-  const std::size_t mid = begin + n / 2;
-  std::nth_element(
-      items.begin() + begin, items.begin() + mid, items.begin() + end,
-      [axis](const Item& a, const Item& b) { return a.position[axis] < b.position[axis]; });
-  const std::size_t left_nodes = n / 2 <= kLeafSize ? 1 : subtree_nodes.at(n / 2);
-  const std::size_t right = node + 1 + left_nodes;
-  nodes_[node] = Node{items[mid].position[axis], axis, std::uint32_t(right), 0};
-#pragma omp task default(shared) if (n > kTaskThreshold)
-  build(items, begin, mid, node + 1, subtree_nodes);
-  build(items, mid, end, right, subtree_nodes);
+  const double split_val = (box[cut][0] + box[cut][1]) / 2;
+  const auto range = min_max(cut);
+  const double cutval = split_val < range[0] ? range[0] : split_val > range[1] ? range[1] : split_val;
+
+  // planeSplit: two Hoare passes, < cutval then <= cutval.
+  const auto pass = [&](std::size_t l, auto goes_left) {
+    std::size_t r = count - 1;
+    for (;;) {
+      while (l <= r && goes_left(p[ind[l]][cut])) ++l;
+      while (r != 0 && l <= r && !goes_left(p[ind[r]][cut])) --r;
+      if (l > r || r == 0) break;
+      std::swap(ind[l], ind[r]);
+      ++l;
+      --r;
+    }
+    return l;
+  };
+  const std::size_t lim1 = pass(0, [cutval](double v) { return v < cutval; });
+  const std::size_t lim2 = pass(lim1, [cutval](double v) { return v <= cutval; });
+  const std::size_t idx = lim1 > count / 2 ? lim1 : lim2 < count / 2 ? lim2 : count / 2;
+
+  Bounds left_box = box;
+  left_box[cut][1] = cutval;
+  Bounds right_box = box;
+  right_box[cut][0] = cutval;
+  std::size_t child2 = 0;
+  if (count > kTaskThreshold && omp_in_parallel()) {
+    std::vector<Node> second;
+#pragma omp task default(shared)
+    build(order, left + idx, right, right_box, second);
+    build(order, left, left + idx, left_box, out);
 #pragma omp taskwait
+    child2 = out.size();
+    for (Node n : second) {
+      if (n.divfeat != kLeaf) n.child2 += static_cast<std::uint32_t>(child2);
+      out.push_back(n);
+    }
+  } else {
+    build(order, left, left + idx, left_box, out);
+    child2 = out.size();
+    build(order, left + idx, right, right_box, out);
+  }
+  Node& node = out[self];
+  node.divfeat = static_cast<std::uint32_t>(cut);
+  node.child2 = static_cast<std::uint32_t>(child2);
+  node.divlow = left_box[cut][1];
+  node.divhigh = right_box[cut][0];
+  for (int a = 0; a < 3; ++a) {
+    box[a][0] = std::min(left_box[a][0], right_box[a][0]);
+    box[a][1] = std::max(left_box[a][1], right_box[a][1]);
+  }
 }
 
 namespace {
 
-// Lower bound of the squared distance from the query to a cell, updated one axis at a time
-// (Arya & Mount's incremental distance, as nanoflann does).
-struct CellBound {
-  Vec3 offset{0, 0, 0};
-  double distance2 = 0;
+/// nanoflann's KNNResultSet with capacity k: worst is DBL_MAX until k points are kept; a point
+/// goes after every kept point at an equal distance, and one tying the worst of a full set is
+/// rejected.
+class KnnSet {
+ public:
+  KnnSet(std::size_t k, std::vector<Neighbour>& out) : k_(k), out_(out) { out_.clear(); }
+  double worst() const {
+    return out_.size() < k_ ? std::numeric_limits<double>::max() : out_.back().distance2;
+  }
+  void add(double d2, std::uint32_t index) {
+    if (out_.size() == k_ && !(d2 < out_.back().distance2)) return;
+    if (out_.size() < k_) out_.push_back(Neighbour{d2, index});
+    std::size_t i = out_.size() - 1;
+    while (i > 0 && out_[i - 1].distance2 > d2) {
+      out_[i] = out_[i - 1];
+      --i;
+    }
+    out_[i] = Neighbour{d2, index};
+  }
+
+ private:
+  std::size_t k_;
+  std::vector<Neighbour>& out_;
+};
+
+/// nanoflann's RadiusResultSet: every offered point strictly within the radius, in order.
+class RadiusSet {
+ public:
+  RadiusSet(double radius2, std::vector<Neighbour>& out) : radius2_(radius2), out_(out) {
+    out_.clear();
+  }
+  double worst() const { return radius2_; }
+  void add(double d2, std::uint32_t index) {
+    if (d2 < radius2_) out_.push_back(Neighbour{d2, index});
+  }
+
+ private:
+  double radius2_;
+  std::vector<Neighbour>& out_;
 };
 
 }  // namespace
 
-template <typename Limit, typename Leaf>
-void KdTree::descend(std::uint32_t node_index, const Vec3& query, const Limit& limit,
-                     Leaf&& on_leaf) const {
-  struct Frame {
-    std::uint32_t node;
-    CellBound bound;
-  };
-  Frame stack[64];
-  int top = 0;
-  stack[top++] = Frame{node_index, CellBound{}};
-  while (top > 0) {
-    Frame f = stack[--top];
-    if (f.bound.distance2 > limit()) continue;
-    for (;;) {
-      const Node& node = nodes_[f.node];
-      if (node.axis == kLeaf) {
-        on_leaf(node.first, node.last);
-        break;
-      }
-      const double diff = query[node.axis] - node.split;
-      const std::uint32_t near_child = diff < 0 ? f.node + 1 : node.first;
-      const std::uint32_t far_child = diff < 0 ? node.first : f.node + 1;
-      CellBound far = f.bound;
-      far.distance2 += diff * diff - far.offset[node.axis] * far.offset[node.axis];
-      far.offset[node.axis] = diff;
-      if (far.distance2 <= limit()) stack[top++] = Frame{far_child, far};
-      f.node = near_child;
+// nanoflann 1.1.7 searchLevel, arithmetic included (the bound decides which subtrees are read,
+// which never changes a result but is kept identical to be safe with rounding).
+template <typename Set>
+void KdTree::search_level(Set& set, const Vec3& query, std::uint32_t node_index, double mindist,
+                          std::array<double, 3>& dists) const {
+  const Node& node = nodes_[node_index];
+  if (node.divfeat == kLeaf) {
+    const double worst = set.worst();
+    for (std::uint32_t i = node.first; i < node.last; ++i) {
+      const double d2 = squared_distance(query, points_[i]);
+      if (d2 < worst) set.add(d2, i);
     }
+    return;
   }
+  const std::uint32_t f = node.divfeat;
+  const double v = query[f];
+  const double diff1 = v - node.divlow;
+  const double diff2 = v - node.divhigh;
+  const bool first_child_first = diff1 + diff2 < 0;
+  const std::uint32_t best = first_child_first ? node_index + 1 : node.child2;
+  const std::uint32_t other = first_child_first ? node.child2 : node_index + 1;
+  const double cut = first_child_first ? diff2 * diff2 : diff1 * diff1;
+  search_level(set, query, best, mindist, dists);
+  const double saved = dists[f];
+  mindist = mindist + cut - saved;
+  dists[f] = cut;
+  if (mindist <= set.worst()) search_level(set, query, other, mindist, dists);
+  dists[f] = saved;
 }
 
-template <typename Visitor>
-void KdTree::radius_visit(std::uint32_t node_index, const Vec3& query, double radius2,
-                          Visitor& visit) const {
-  const double limit = radius2 * kPruneSlack;
-  descend(node_index, query, [limit] { return limit; },
-          [&](std::uint32_t first, std::uint32_t last) {
-            for (std::uint32_t i = first; i < last; ++i) {
-              const double d2 = squared_distance(query, points_[i]);
-              if (d2 < radius2) visit(d2, i);
-            }
-          });
+template <typename Set>
+void KdTree::search(Set& set, const Vec3& query) const {
+  if (nodes_.empty()) return;
+  std::array<double, 3> dists{0, 0, 0};
+  double mindist = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (query[a] < root_box_[a][0]) {
+      dists[a] = (query[a] - root_box_[a][0]) * (query[a] - root_box_[a][0]);
+      mindist += dists[a];
+    }
+    if (query[a] > root_box_[a][1]) {
+      dists[a] = (query[a] - root_box_[a][1]) * (query[a] - root_box_[a][1]);
+      mindist += dists[a];
+    }
+  }
+  search_level(set, query, 0, mindist, dists);
 }
 
 void KdTree::radius_search(const Vec3& query, double radius2, std::vector<Neighbour>& out) const {
-  out.clear();
-  if (nodes_.empty()) return;
-  auto visit = [&out](double d2, std::uint32_t i) { out.push_back(Neighbour{d2, i}); };
-  radius_visit(0, query, radius2, visit);
+  RadiusSet set(radius2, out);
+  search(set, query);
+}
+
+void KdTree::sorted_radius_search(const Vec3& query, double radius2,
+                                  std::vector<Neighbour>& out) const {
+  radius_search(query, radius2, out);
+  // IndexDist_Sorter: the distance alone; libstdc++'s std::sort then orders ties exactly as in
+  // the reference (same algorithm, same comparisons, same input order).
+  std::sort(out.begin(), out.end(),
+            [](const Neighbour& a, const Neighbour& b) { return a.distance2 < b.distance2; });
+}
+
+void KdTree::knn_search(const Vec3& query, std::size_t k, std::vector<Neighbour>& out) const {
+  KnnSet set(std::min(k, size()), out);
+  if (k == 0) return;
+  search(set, query);
 }
 
 namespace {
@@ -220,6 +331,12 @@ double box_distance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
   return d2;
 }
 
+// Lower bound of the squared distance from the query box to a cell, updated one axis at a time.
+struct CellBound {
+  Vec3 offset{0, 0, 0};
+  double distance2 = 0;
+};
+
 }  // namespace
 
 void KdTree::box_search(const Vec3& lo, const Vec3& hi, double radius2,
@@ -230,18 +347,19 @@ void KdTree::box_search(const Vec3& lo, const Vec3& hi, double radius2,
     std::uint32_t node;
     CellBound bound;
   };
-  Frame stack[64];
-  int top = 0;
-  stack[top++] = Frame{0, CellBound{}};
+  std::vector<Frame> stack;
+  stack.reserve(64);
+  stack.push_back(Frame{0, CellBound{}});
   const double limit = radius2 * kPruneSlack;
-  while (top > 0) {
-    Frame f = stack[--top];
+  while (!stack.empty()) {
+    Frame f = stack.back();
+    stack.pop_back();
     for (;;) {
       const Node& node = nodes_[f.node];
-      if (node.axis == kLeaf) {
+      if (node.divfeat == kLeaf) {
         // Whole leaves when their box is entirely in or out of reach, else point by point
         // (branch-free append).
-        const auto [near2, far2] = box_box_distance2(lo, hi, leaf_boxes_[node.leaf]);
+        const auto [near2, far2] = box_box_distance2(lo, hi, leaf_boxes_[node.child2]);
         if (near2 > limit) break;
         std::size_t m = out.size();
         out.resize(m + (node.last - node.first));
@@ -253,10 +371,10 @@ void KdTree::box_search(const Vec3& lo, const Vec3& hi, double radius2,
         out.resize(m);
         break;
       }
-      // Left child: coordinates <= split; right child: >= split. Gap from the box to each.
-      const std::uint32_t a = node.axis;
-      const double left_gap = lo[a] > node.split ? lo[a] - node.split : 0.0;
-      const double right_gap = hi[a] < node.split ? node.split - hi[a] : 0.0;
+      // First child: coordinates <= divlow; second child: >= divhigh. Gap from the box to each.
+      const std::uint32_t a = node.divfeat;
+      const double left_gap = lo[a] > node.divlow ? lo[a] - node.divlow : 0.0;
+      const double right_gap = hi[a] < node.divhigh ? node.divhigh - hi[a] : 0.0;
       CellBound left = f.bound;
       left.distance2 += left_gap * left_gap - left.offset[a] * left.offset[a];
       left.offset[a] = left_gap;
@@ -266,88 +384,17 @@ void KdTree::box_search(const Vec3& lo, const Vec3& hi, double radius2,
       const bool visit_left = left.distance2 <= limit;
       const bool visit_right = right.distance2 <= limit;
       if (visit_left && visit_right) {
-        stack[top++] = Frame{node.first, right};
+        stack.push_back(Frame{node.child2, right});
         f = Frame{f.node + 1, left};
       } else if (visit_left) {
         f = Frame{f.node + 1, left};
       } else if (visit_right) {
-        f = Frame{node.first, right};
+        f = Frame{node.child2, right};
       } else {
         break;
       }
     }
   }
-}
-
-namespace {
-
-// The k best so far, sorted; insertion keeps the earlier of equal distances first and rejects a
-// candidate equal to the current worst once full (nanoflann KNNResultSet::addPoint).
-class KnnSet {
- public:
-  KnnSet(std::size_t k, std::vector<Neighbour>& out) : k_(k), out_(out) { out_.clear(); }
-  double worst() const {
-    if (k_ == 0) return -std::numeric_limits<double>::infinity();
-    return out_.size() < k_ ? std::numeric_limits<double>::infinity() : out_.back().distance2;
-  }
-  void add(double d2, std::uint32_t index) {
-    if (k_ == 0 || (out_.size() == k_ && !(d2 < out_.back().distance2))) return;
-    if (out_.size() < k_) out_.push_back(Neighbour{d2, index});
-    std::size_t i = out_.size() - 1;
-    while (i > 0 && out_[i - 1].distance2 > d2) {
-      out_[i] = out_[i - 1];
-      --i;
-    }
-    out_[i] = Neighbour{d2, index};
-  }
-
- private:
-  std::size_t k_;
-  std::vector<Neighbour>& out_;
-};
-
-// kNN plus every point strictly within a radius; prunes with the larger of the two bounds.
-class KnnRadiusSet {
- public:
-  KnnRadiusSet(std::size_t k, double radius2, std::vector<Neighbour>& nearest,
-               std::vector<Neighbour>& within)
-      : knn_(k, nearest), radius2_(radius2), within_(within) {
-    within_.clear();
-  }
-  double worst() const { return std::max(knn_.worst(), radius2_); }
-  void add(double d2, std::uint32_t index) {
-    if (d2 < radius2_) within_.push_back(Neighbour{d2, index});
-    knn_.add(d2, index);
-  }
-
- private:
-  KnnSet knn_;
-  double radius2_;
-  std::vector<Neighbour>& within_;
-};
-
-}  // namespace
-
-template <typename Set>
-void KdTree::knn_visit(std::uint32_t node_index, const Vec3& query, Set& set) const {
-  descend(node_index, query, [&set] { return set.worst() * kPruneSlack; },
-          [&](std::uint32_t first, std::uint32_t last) {
-            for (std::uint32_t i = first; i < last; ++i) set.add(squared_distance(query, points_[i]), i);
-          });
-}
-
-void KdTree::knn_search(const Vec3& query, std::size_t k, std::vector<Neighbour>& out) const {
-  KnnSet set(std::min(k, size()), out);
-  if (nodes_.empty() || k == 0) return;
-  knn_visit(0, query, set);
-}
-
-void KdTree::knn_radius_search(const Vec3& query, std::size_t k, double radius2,
-                               std::vector<Neighbour>& nearest,
-                               std::vector<Neighbour>& within) const {
-  KnnRadiusSet set(std::min(k, size()), radius2, nearest, within);
-  if (nodes_.empty()) return;
-  knn_visit(0, query, set);
 }
 
 }  // namespace qm3d::pointcloud::detail

@@ -1,16 +1,39 @@
-// An exact double-precision k-d tree for fixed-radius and k-nearest-neighbour queries.
+// The k-d tree of the reference implementation: the tree nanoflann 1.1.7 builds
+// (KDTreeSingleIndexAdaptor, leaf size 10, as MEPP-team/PCQM configures it) and its exact search
+// order, over double coordinates. Written from the description in docs NANOFLANN-1.1.7.md.
 //
-// Why not only PCL's KdTreeFLANN: FLANN stores float coordinates and compares float distances,
-// while the reference (MEPP-team/PCQM, nanoflann 1.1.7 over double coordinates) keeps a point when
-// its double squared distance, summed as dx*dx + dy*dy + dz*dz, is strictly below r^2. This tree
-// computes exactly that value for every candidate, so its neighbour sets are the reference's by
-// construction (see pcl_search.h for the PCL variant, which must re-filter its candidates).
+// Why the same tree and not just any exact one: among points at the same distance from a query
+// (everywhere on voxelised clouds), the reference keeps the one its traversal reaches first —
+// as the nearest-neighbour colour, as the k-th neighbour of a kNN set, and in the order of the
+// rows of its quadric fits. Only nanoflann 1.1.7's tree, searched in its order, reproduces those
+// choices (1.2.3 changed the split rule: Debian's nanoflann 1.4.3 builds another tree).
+//
+// The rules, in the order the build and the searches apply them (NANOFLANN-1.1.7.md §1, §3, §4):
+// - Build over the points in input order. A range of at most 10 points is a leaf. Otherwise the
+//   cut dimension is chosen by middleSplit_ from the node's *inherited* box (the root's tight box
+//   clipped by the ancestors' cut values): dims whose span exceeds (1 - 1e-5) of the largest
+//   qualify; for each qualifying dim in ascending order, the spread of the points along the
+//   *currently chosen* dim (a bug of 1.1.7, fixed in 1.2.3) is compared strictly with the best so
+//   far. The cut value is the middle of the inherited box clamped to the points' range; a two-pass
+//   Hoare partition (< cut, then <= cut) gives lim1 <= lim2, and the split index is lim1 if it is
+//   above count/2, else lim2 if below, else count/2. A node keeps divlow = the largest coordinate
+//   of its first child and divhigh = the smallest of its second child along the cut dim.
+// - Search: from the root's tight box distances, at each node the first child is visited first
+//   iff (v - divlow) + (v - divhigh) < 0 (v = the query's coordinate; the exact midpoint goes to
+//   the second child), then the other iff the incrementally updated bound
+//   (bound + cut^2) - old_axis_term is <= the result set's current worst. A leaf reads the worst
+//   once and offers, in tree order, each point whose distance is strictly below it.
+// - kNN result set: a point is inserted after every kept point at an equal distance and is
+//   rejected when the set is full and it only ties the worst: the first k points of the traversal
+//   ordered by distance. Radius result set: every point with d^2 < r^2, in traversal order; the
+//   reference sorts it with std::sort on the distance alone (libstdc++ introsort: not stable above
+//   16 elements), which sorted_radius_search reproduces by calling the same routine on the same
+//   input order.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <map>
 #include <vector>
 
 #include "qm3d/common/types.h"
@@ -23,7 +46,7 @@ struct Neighbour {
   std::uint32_t index = 0;
 };
 
-/// Squared distance as nanoflann's L2 adaptor sums it for 3-D points (left to right).
+/// Squared distance as the reference sums it for 3-D points: (dx dx + dy dy) + dz dz.
 inline double squared_distance(const Vec3& a, const Vec3& b) {
   const double dx = a[0] - b[0];
   const double dy = a[1] - b[1];
@@ -31,14 +54,22 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
-/// Orders results by squared distance, ties by index (deterministic).
+/// Orders results by squared distance, ties by index (deterministic; the reference's order
+/// whenever no two distances are equal).
 void sort_by_distance(std::vector<Neighbour>& neighbours);
 
-/// A balanced k-d tree over #P points. The tree stores the points in its own order (spatially
-/// coherent: consecutive indices are close in space); every index it returns is a tree index.
+/// True when two consecutive entries of a distance-sorted list have equal distances.
+bool has_ties(const std::vector<Neighbour>& sorted);
+
+/// nanoflann 1.1.7's k-d tree over #P points. The tree stores the points in its own order (the
+/// permuted index array of nanoflann, spatially coherent); every index it returns is a tree
+/// index.
 class KdTree {
  public:
-  /// Builds the tree, in parallel over subtrees (OpenMP tasks, `threads` threads, 0 = the
+  /// Points per leaf (MEPP-team/PCQM: KDTreeSingleIndexAdaptorParams(10)).
+  static constexpr std::size_t kLeafSize = 10;
+
+  /// Builds the tree, in parallel over large subtrees (OpenMP tasks, `threads` threads, 0 = the
   /// OpenMP default) when called outside a parallel region. The tree does not depend on the
   /// thread count. At most 2^32 - 2 points.
   explicit KdTree(const std::vector<Vec3>& points, int threads = 0);
@@ -49,18 +80,18 @@ class KdTree {
   /// Tree index -> index in the input vector.
   const std::vector<std::uint32_t>& input_index() const { return input_index_; }
 
-  /// All points with squared distance strictly below `radius2`, in tree order (unsorted by
-  /// distance). `out` is overwritten.
+  /// All points with squared distance strictly below `radius2`, in the reference's traversal
+  /// order (its `radiusSearch` with sorted = false). `out` is overwritten.
   void radius_search(const Vec3& query, double radius2, std::vector<Neighbour>& out) const;
 
-  /// The min(k, size) nearest points sorted by distance. Among equal distances the point found
-  /// first is kept, as in nanoflann's KNNResultSet. `out` is overwritten.
-  void knn_search(const Vec3& query, std::size_t k, std::vector<Neighbour>& out) const;
+  /// radius_search, then std::sort on the distance alone: the reference's `radiusSearch` with
+  /// sorted = true, ties included.
+  void sorted_radius_search(const Vec3& query, double radius2, std::vector<Neighbour>& out) const;
 
-  /// Both searches in one traversal: the k nearest (sorted) and everything strictly within
-  /// sqrt(radius2) (unsorted). Same results as the two calls above.
-  void knn_radius_search(const Vec3& query, std::size_t k, double radius2,
-                         std::vector<Neighbour>& nearest, std::vector<Neighbour>& within) const;
+  /// The min(k, size) nearest points sorted by distance; among equal distances the one the
+  /// traversal reaches first comes first and wins the last place (the reference's `knnSearch`).
+  /// `out` is overwritten.
+  void knn_search(const Vec3& query, std::size_t k, std::vector<Neighbour>& out) const;
 
   /// Every point whose distance to the box [lo, hi] is at most sqrt(radius2) (plus a relative
   /// 1e-9 of slack), in tree order: a superset of what radius_search(q, radius2) returns for any
@@ -73,31 +104,30 @@ class KdTree {
 
  private:
   struct Node {
-    double split = 0;         // inner: split coordinate
-    std::uint32_t axis = 0;   // inner: 0..2, leaf: kLeaf
-    std::uint32_t first = 0;  // inner: right child; leaf: first point
-    std::uint32_t last = 0;   // leaf: one past the last point
-    std::uint32_t leaf = 0;   // leaf: its position in leaves_ / leaf_boxes_
+    double divlow = 0;        // inner: largest coordinate of the first child along divfeat
+    double divhigh = 0;       // inner: smallest coordinate of the second child along divfeat
+    std::uint32_t divfeat = 0;  // inner: 0..2, leaf: kLeaf
+    std::uint32_t child2 = 0;   // inner: the second child (the first is the next node); leaf: its index in leaves_
+    std::uint32_t first = 0;    // leaf: first point
+    std::uint32_t last = 0;     // leaf: one past the last point
   };
-  struct Item;
+  using Bounds = std::array<std::array<double, 2>, 3>;  // per axis {low, high}
   static constexpr std::uint32_t kLeaf = 3;
 
+  void build(std::vector<std::uint32_t>& order, std::size_t left, std::size_t right, Bounds& box,
+             std::vector<Node>& out) const;
   void index_leaves();
-  void build(std::vector<Item>& items, std::size_t begin, std::size_t end, std::size_t node,
-             const std::map<std::size_t, std::size_t>& subtree_nodes);
-  /// Depth-first descent from `node`, nearer child first; far children are kept with their cell
-  /// bound and skipped when it exceeds limit() (re-checked when popped, as limit() may shrink).
-  /// on_leaf(first, last) receives the point range of every leaf reached.
-  template <typename Limit, typename Leaf>
-  void descend(std::uint32_t node, const Vec3& query, const Limit& limit, Leaf&& on_leaf) const;
-  template <typename Visitor>
-  void radius_visit(std::uint32_t node, const Vec3& query, double radius2, Visitor& visit) const;
   template <typename Set>
-  void knn_visit(std::uint32_t node, const Vec3& query, Set& set) const;
+  void search_level(Set& set, const Vec3& query, std::uint32_t node, double mindist,
+                    std::array<double, 3>& dists) const;
+  template <typename Set>
+  void search(Set& set, const Vec3& query) const;
 
+  const std::vector<Vec3>* input_ = nullptr;  // during the build only
   std::vector<Vec3> points_;
   std::vector<std::uint32_t> input_index_;
   std::vector<Node> nodes_;
+  Bounds root_box_{};
   std::vector<std::array<std::uint32_t, 2>> leaves_;
   std::vector<std::array<Vec3, 2>> leaf_boxes_;  // tight bounding box of each leaf's points
 };

@@ -73,6 +73,59 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
   return quirk;
 }
 
+std::string significant(double v, int digits) {
+  std::ostringstream o;
+  o.precision(digits);
+  o << v;
+  return o.str();
+}
+
+/// Rounded up to two significant digits.
+double round_up_2(double v) {
+  const double unit = std::pow(10.0, std::floor(std::log10(v)) - 1);
+  return std::ceil(v / unit) * unit;
+}
+
+/// SPEC-PCQM §9.5: a quadric fit with fewer than six independent points has no unique solution
+/// (and a nearly singular one barely has one); the reference returns its QR's basic solution,
+/// whose rounding differs between Eigen versions (its bundled 3.3.5 and Debian's 3.4), and
+/// qm3d's value is the one with Debian's Eigen. One warning per kind of fit that is
+/// underdetermined on more than 1% of the points, with the setting that avoids it.
+void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_t points,
+                                  const std::string& name, const PcqmOptions& o,
+                                  std::vector<std::string>& warnings) {
+  const auto share = [points](std::size_t count) {
+    return significant(100.0 * double(count) / double(points), 3) + "% of the ";
+  };
+  const std::string consequence =
+      ": they are not determined by the points (fewer than six independent ones, or nearly so), "
+      "so their values depend on the rounding of the linear-algebra library (the reference's "
+      "bundled Eigen 3.3.5 and Eigen 3.4 differ there; qm3d gives the Eigen 3.4 value)";
+  const double limit = detail::kUnderdeterminedShare * double(points);
+  if (double(out.underdetermined_curvature) > limit) {
+    std::string w = "PCQM: " + share(out.underdetermined_curvature) + name +
+                    " cloud's points have an underdetermined curvature fit (quadric on the "
+                    "points within the curvature radius " + significant(o.radius_rel, 3) +
+                    " x box size)" + consequence + " and so do F1-F3";
+    w += out.suggestion.radius_rel > 0
+             ? "; with a curvature radius of " + significant(round_up_2(out.suggestion.radius_rel), 2) +
+                   " (qm3d --radius, reference -r) fewer than 0.5% of a sample of points are"
+             : "; no curvature radius up to 16 times this one avoids it";
+    warnings.push_back(w);
+  }
+  if (double(out.underdetermined_match) > limit) {
+    std::string w = "PCQM: " + share(out.underdetermined_match) + name +
+                    " cloud's points have an underdetermined correspondence fit (quadric on "
+                    "the " + std::to_string(o.knn) + " nearest points of the other cloud)" +
+                    consequence + " and so do the Gaussian weights of every feature";
+    w += out.suggestion.knn > 0
+             ? "; with knn " + std::to_string(out.suggestion.knn) +
+                   " (qm3d --knn, reference -knn) fewer than 0.5% of a sample of points are"
+             : "; no knn up to 16 times this one avoids it";
+    warnings.push_back(w);
+  }
+}
+
 PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
                         const std::string& iterated_name, const PcqmOptions& o,
                         const Lab2000hlTable& table, std::vector<std::string>& warnings,
@@ -86,9 +139,10 @@ PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
   params.progress = &progress;
   params.label = std::move(label);
   const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
+  warn_of_underdetermined_fits(out, iterated.size(), iterated_name, o, warnings);
 
   PcqmDirection d;
-  d.features = mean_features(out.features);
+  d.features = out.pooled;
   d.score = o.model.apply(d.features);
   d.bbox_max_side = params.max_dim;
   if (o.per_point) {

@@ -13,6 +13,7 @@
 #include "candidate_set.h"
 #include "kd_tree.h"
 #include "pcqm_internal.h"
+#include "qm3d/common/pooling.h"
 #include "qm3d/common/statistics.h"
 #include "quadric_fit.h"
 
@@ -57,7 +58,8 @@ struct PointData {
         lightness_dist(n),
         chroma_ref(n),
         chroma_dist(n),
-        hue_difference(n) {
+        hue_difference(n),
+        underdetermined(n) {
     if (diagnostics) {
       lab_ref.resize(n);
       lab_dist.resize(n);
@@ -69,6 +71,8 @@ struct PointData {
   std::vector<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
   std::vector<double> curvature_ref, curvature_dist;
   std::vector<double> lightness_ref, lightness_dist, chroma_ref, chroma_dist, hue_difference;
+  /// Which of p's quadric fits are underdetermined (quadric_fit.h): kCurvatureFit, kMatchFit.
+  std::vector<std::uint8_t> underdetermined;
   std::vector<Lab> lab_ref, lab_dist;                              // diagnostics only
   std::vector<std::uint32_t> count_radius_dist, count_radius_ref;  // diagnostics only
 };
@@ -88,6 +92,9 @@ struct Stage1Scratch {
   CandidateSet reach_dist;  ///< D's points within the leaf's kNN reach (gathered when needed)
   CandidateSet near_ref;    ///< R's points within r of the leaf's box (when positions differ)
   bool have_reach = false;
+  /// The last list of D (of R) had equal distances: search the next one in the reference's
+  /// order directly (on voxelised clouds nearly every list has ties).
+  bool ties_dist = false, ties_ref = false;
   std::vector<Neighbour> nearest, within_dist, within_ref;
   QuadricFitter fitter;
   // The last query whose kNN was computed and its k-th nearest distance on D: they bound the
@@ -112,13 +119,14 @@ void curvatures(std::size_t i, const Clouds& c, const DirectionParams& params,
                 const std::vector<Neighbour>& within_dist, const std::vector<Neighbour>& within_ref,
                 QuadricFitter& fitter, PointData& out) {
   const Vec3& p = c.ref_tree.points()[i];
-  const double h_dist = fitter.fit(p, c.dist_tree.points(), within_dist).mean_curvature;
-  const double h_ref =
+  const QuadricFit dist = fitter.fit(p, c.dist_tree.points(), within_dist);
+  const QuadricFit ref =
       same_coordinates(c.dist_tree.points(), within_dist, c.ref_tree.points(), within_ref)
-          ? h_dist
-          : fitter.fit(p, c.ref_tree.points(), within_ref).mean_curvature;
-  out.curvature_dist[i] = std::abs(h_dist) * params.max_dim;
-  out.curvature_ref[i] = std::abs(h_ref) * params.max_dim;
+          ? dist
+          : fitter.fit(p, c.ref_tree.points(), within_ref);
+  out.curvature_dist[i] = std::abs(dist.mean_curvature) * params.max_dim;
+  out.curvature_ref[i] = std::abs(ref.mean_curvature) * params.max_dim;
+  if (dist.underdetermined || ref.underdetermined) out.underdetermined[i] |= kCurvatureFit;
 }
 
 /// LAB2000HL of p's colour and of nn_D(p)'s colour, chroma, and the hue difference.
@@ -140,7 +148,7 @@ void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab200
 /// Gathers D's points within the kNN reach of the leaf: d_k(q) <= d_k(p0) + |q - p0| for the
 /// leaf's first point p0. Also starts the chain of kNN bounds at p0.
 void gather_reach(const std::array<std::uint32_t, 2>& leaf, const Clouds& c, std::size_t k,
-                  const Radii& radii, Stage1Scratch& s) {
+                  Stage1Scratch& s) {
   const std::vector<Vec3>& points = c.ref_tree.points();
   const Vec3& p0 = points[leaf[0]];
   c.dist_tree.knn_search(p0, k, s.nearest);
@@ -151,34 +159,63 @@ void gather_reach(const std::array<std::uint32_t, 2>& leaf, const Clouds& c, std
   s.previous = p0;
   s.previous_kth = std::sqrt(s.nearest.back().distance2);
   const double reach = (s.previous_kth + std::sqrt(spread2)) * kReachSlack;
-  s.reach_dist.gather(c.dist_tree, box_of(points, leaf[0], leaf[1]),
-                      std::max(radii.curvature2, reach * reach));
+  s.reach_dist.gather(c.dist_tree, box_of(points, leaf[0], leaf[1]), reach * reach);
   s.have_reach = true;
+}
+
+/// The points of `tree` strictly within sqrt(radius2) of p, sorted by distance as the reference
+/// sorts them (std::sort of its traversal order). The batched search gives the same list
+/// whenever no two distances are equal; otherwise the order of the ties is the reference's to
+/// decide, and the list is searched again in its order. `ties` carries over to the next query.
+void sorted_within(const KdTree& tree, CandidateSet& near, const Vec3& p, double radius2,
+                   bool& ties, std::vector<Neighbour>& out) {
+  if (!ties) {
+    near.radius(p, radius2, out);
+    sort_by_distance(out);
+    if (!has_ties(out)) return;
+  }
+  tree.sorted_radius_search(p, radius2, out);
+  ties = has_ties(out);
 }
 
 /// nn_D(p) (returned, a D tree index), D's points within r of p (s.within_dist, sorted) and
 /// p-hat (SPEC-PCQM 1.4 step 3): the foot point of the quadric fitted to p's kNN on D when it is
 /// not farther from p than nn_D(p), else nn_D(p). When a point of D coincides with p, it is
 /// nn_D(p) and the foot point can only tie with it at distance 0: no kNN, no fit.
+///
+/// Where equal distances make the reference's choice depend on its traversal (SPEC-PCQM §9: the
+/// first kNN result gives the colour, the k-th place goes to the tie reached first), the kNN is
+/// searched in the reference's order.
 std::uint32_t match(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const Clouds& c,
                     const DirectionParams& params, const Radii& radii, Stage1Scratch& s,
-                    Vec3& correspondence) {
+                    Vec3& correspondence, std::uint8_t& underdetermined) {
   const Vec3& p = c.ref_tree.points()[i];
   const std::vector<Vec3>& dist_points = c.dist_tree.points();
-  s.near_dist.radius(p, radii.curvature2, s.within_dist);
-  sort_by_distance(s.within_dist);
+  sorted_within(c.dist_tree, s.near_dist, p, radii.curvature2, s.ties_dist, s.within_dist);
   if (!s.within_dist.empty() && s.within_dist.front().distance2 == 0) {
-    correspondence = dist_points[s.within_dist.front().index];
-    return s.within_dist.front().index;
+    std::uint32_t nearest = s.within_dist.front().index;
+    if (s.within_dist.size() > 1 && s.within_dist[1].distance2 == 0) {
+      c.dist_tree.knn_search(p, 1, s.nearest);  // several points coincide with p
+      nearest = s.nearest.front().index;
+    }
+    correspondence = dist_points[nearest];
+    return nearest;
   }
-  if (!s.have_reach) gather_reach(leaf, c, params.knn, radii, s);
-  const double bound = (s.previous_kth + std::sqrt(squared_distance(p, s.previous))) * kReachSlack;
-  s.previous_kth = std::sqrt(s.reach_dist.knn_radius(p, params.knn, bound * bound, radii.curvature2,
-                                                     s.nearest, s.within_dist));
-  s.previous = p;
+  if (s.ties_dist) {
+    c.dist_tree.knn_search(p, params.knn, s.nearest);
+  } else {
+    if (!s.have_reach) gather_reach(leaf, c, params.knn, s);
+    const double bound =
+        (s.previous_kth + std::sqrt(squared_distance(p, s.previous))) * kReachSlack;
+    const CandidateSet::Knn found = s.reach_dist.knn(p, params.knn, bound * bound, s.nearest);
+    s.previous_kth = std::sqrt(found.kth_distance2);
+    s.previous = p;
+    if (found.tie_at_kth || has_ties(s.nearest)) c.dist_tree.knn_search(p, params.knn, s.nearest);
+  }
   const Vec3& closest = dist_points[s.nearest.front().index];
-  const Vec3 foot = s.fitter.fit(p, dist_points, s.nearest).foot;
-  correspondence = point_distance(p, foot) <= point_distance(p, closest) ? foot : closest;
+  const QuadricFit fit = s.fitter.fit(p, dist_points, s.nearest);
+  if (fit.underdetermined) underdetermined |= kMatchFit;
+  correspondence = point_distance(p, fit.foot) <= point_distance(p, closest) ? fit.foot : closest;
   return s.nearest.front().index;
 }
 
@@ -186,12 +223,12 @@ void stage1_point(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const
                   const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                   Stage1Scratch& s, PointData& out) {
   const Vec3& p = c.ref_tree.points()[i];
-  const std::uint32_t nearest = match(leaf, i, c, params, radii, s, out.correspondence[i]);
+  const std::uint32_t nearest =
+      match(leaf, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
   out.correspondence_is_point[i] = out.correspondence[i] == p;
   const std::vector<Neighbour>& within_ref = c.same_positions ? s.within_dist : s.within_ref;
   if (!c.same_positions) {
-    s.near_ref.radius(p, radii.curvature2, s.within_ref);
-    sort_by_distance(s.within_ref);
+    sorted_within(c.ref_tree, s.near_ref, p, radii.curvature2, s.ties_ref, s.within_ref);
   }
   if (!out.count_radius_dist.empty()) {
     out.count_radius_dist[i] = static_cast<std::uint32_t>(s.within_dist.size());
@@ -270,7 +307,8 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
   }
 }
 
-/// f1..f8 of the points of one leaf, stored at their input indices.
+/// f1..f3 and s4..s8 (similarities, pooled as the reference pools them) of the points of one
+/// leaf, stored at their input indices.
 void stage2_leaf(const std::array<std::uint32_t, 2>& leaf, const KdTree& ref_tree,
                  const PointData& d, const Radii& radii, Stage2Scratch& s,
                  std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
@@ -279,7 +317,7 @@ void stage2_leaf(const std::array<std::uint32_t, 2>& leaf, const KdTree& ref_tre
     s.candidates.radius(ref_tree.points()[i], radii.statistics2, s.within);
     gather_samples(i, d, radii, s);
     const std::uint32_t input = ref_tree.input_index()[i];
-    features[input] = local_features(s.samples, kPcqmConventions);
+    features[input] = local_features_and_similarities(s.samples, kPcqmConventions);
     if (counts != nullptr) (*counts)[input] = static_cast<std::uint32_t>(s.within.size());
   }
 }
@@ -301,6 +339,65 @@ std::vector<T> to_input_order(const std::vector<T>& tree_order, const KdTree& tr
   return out;
 }
 
+/// Share of a sample of the iterated points (about kSamples, evenly spread in tree order) for
+/// which `underdetermined(p)` holds.
+template <typename Test>
+double sampled_share(const KdTree& tree, Test&& underdetermined) {
+  constexpr std::size_t kSamples = 1000;
+  const std::size_t step = std::max<std::size_t>(1, tree.size() / kSamples);
+  std::size_t sampled = 0;
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < tree.size(); i += step, ++sampled) {
+    hits += underdetermined(tree.points()[i]) ? 1 : 0;
+  }
+  return double(hits) / double(sampled);
+}
+
+/// Settings that would leave at most half of kUnderdeterminedShare of the points with an
+/// underdetermined fit of each kind that is too common (bits of `kinds`), measured on a sample:
+/// the smallest curvature radius_rel and the smallest knn on a geometric scale above the current
+/// ones (up to 16 times them); 0 where none does.
+Suggestion suggest_settings(const Clouds& c, const DirectionParams& params, std::uint8_t kinds) {
+  constexpr double kTarget = kUnderdeterminedShare / 2;
+  constexpr double kMaxGrowth = 16;
+  QuadricFitter fitter;
+  std::vector<Neighbour> found;
+  Suggestion out;
+  if (kinds & kCurvatureFit) {
+    for (double rel = params.radius_rel * 1.25; rel <= params.radius_rel * kMaxGrowth;
+         rel *= 1.25) {
+      const double r = rel * params.max_dim;
+      const double share = sampled_share(c.ref_tree, [&](const Vec3& p) {
+        for (const KdTree* tree : {&c.dist_tree, &c.ref_tree}) {
+          tree->sorted_radius_search(p, r * r, found);
+          if (fitter.fit(p, tree->points(), found).underdetermined) return true;
+        }
+        return false;
+      });
+      if (share <= kTarget) {
+        out.radius_rel = rel;
+        break;
+      }
+    }
+  }
+  if (kinds & kMatchFit) {
+    for (std::size_t k = params.knn + (params.knn + 1) / 2;
+         k <= params.knn * kMaxGrowth && k <= c.dist_tree.size(); k += (k + 1) / 2) {
+      const double share = sampled_share(c.ref_tree, [&](const Vec3& p) {
+        c.dist_tree.knn_search(p, k, found);
+        // A point of D on p is its correspondence: no fit (match()).
+        return found.front().distance2 != 0 &&
+               fitter.fit(p, c.dist_tree.points(), found).underdetermined;
+      });
+      if (share <= kTarget) {
+        out.knn = k;
+        break;
+      }
+    }
+  }
+  return out;
+}
+
 PointDiagnostics diagnostics_of(const PointData& d, const KdTree& tree) {
   PointDiagnostics out;
   out.correspondence = to_input_order(d.correspondence, tree);
@@ -313,6 +410,7 @@ PointDiagnostics diagnostics_of(const PointData& d, const KdTree& tree) {
   out.hue_difference = to_input_order(d.hue_difference, tree);
   out.count_radius_dist = to_input_order(d.count_radius_dist, tree);
   out.count_radius_ref = to_input_order(d.count_radius_ref, tree);
+  out.underdetermined = to_input_order(d.underdetermined, tree);
   return out;
 }
 
@@ -360,6 +458,16 @@ DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& d
   if (p.diagnostics) counts.resize(ref_tree.size());
   stage("features");
   out.features = stage2(ref_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
+  out.pooled = mean_features_from_similarities(out.features);
+  std::uint8_t too_common = 0;
+  for (std::uint8_t kind : {kCurvatureFit, kMatchFit}) {
+    std::size_t& count = kind == kCurvatureFit ? out.underdetermined_curvature
+                                               : out.underdetermined_match;
+    for (std::uint8_t u : data.underdetermined) count += (u & kind) != 0;
+    if (count > kUnderdeterminedShare * double(ref_tree.size())) too_common |= kind;
+  }
+  if (too_common != 0) out.suggestion = suggest_settings(clouds, p, too_common);
+  for (FeatureVector& f : out.features) similarities_to_features(f);
   if (p.diagnostics) {
     out.diagnostics = diagnostics_of(data, ref_tree);
     out.diagnostics.count_statistics = std::move(counts);

@@ -40,11 +40,36 @@ struct PointDiagnostics {
   std::vector<std::uint32_t> count_radius_dist;  ///< #D points within r
   std::vector<std::uint32_t> count_radius_ref;   ///< #R points within r
   std::vector<std::uint32_t> count_statistics;   ///< #R points within radius_factor r
+  /// Bits kCurvatureFit (k_D's or k_R's fit) and kMatchFit (p-hat's fit) when underdetermined.
+  std::vector<std::uint8_t> underdetermined;
+};
+
+inline constexpr std::uint8_t kCurvatureFit = 1;
+inline constexpr std::uint8_t kMatchFit = 2;
+
+/// Share of points with an underdetermined fit of one kind above which compute_direction looks
+/// for settings that avoid them (and compute_pcqm warns).
+inline constexpr double kUnderdeterminedShare = 0.01;
+
+/// Settings under which few fits are underdetermined (0 = none found or not measured).
+struct Suggestion {
+  double radius_rel = 0;  ///< curvature radius (fraction of max_dim)
+  std::size_t knn = 0;    ///< k of the correspondence kNN
 };
 
 struct DirectionOutput {
   /// f1..f8 of each point (f4..f8 as 1 - similarity), in the iterated cloud's input order.
   std::vector<FeatureVector> features;
+  /// F1..F8 pooled as the reference pools them (pooling.h mean_features_from_similarities).
+  FeatureVector pooled{};
+  /// Points whose k_D or k_R fit, and points whose p-hat fit, is underdetermined
+  /// (quadric_fit.h): their curvatures or p-hat depend on the linear-algebra library's rounding
+  /// (SPEC-PCQM §9.5).
+  std::size_t underdetermined_curvature = 0;
+  std::size_t underdetermined_match = 0;
+  /// Measured only for a kind of fit underdetermined on more than kUnderdeterminedShare of the
+  /// points.
+  Suggestion suggestion;
   PointDiagnostics diagnostics;  ///< empty unless DirectionParams::diagnostics
 };
 

@@ -3,6 +3,29 @@
 #include <cmath>
 
 namespace qm3d::pointcloud::detail {
+namespace {
+
+/// A fit counts as underdetermined below this scaled pivot ratio: its least-squares solution is
+/// then sensitive to rounding beyond 1e-9 relative (about 1e-16 / ratio), so the QR
+/// implementation's rounding shows in the result.
+constexpr double kConditionLimit = 1e-7;
+
+/// Whether every pivot of the column-pivoted QR of `design` is at least kConditionLimit of its
+/// column's norm: the diagonal of R for the design with unit columns, an estimate of the
+/// reciprocal condition number that ignores the columns' scales (x^2, x, 1 differ by orders of
+/// magnitude on small neighbourhoods without making the fit ill-posed).
+bool well_conditioned(const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr,
+                      const Eigen::MatrixXd& design) {
+  const auto& r = qr.matrixQR();
+  const auto& perm = qr.colsPermutation().indices();
+  for (Eigen::Index i = 0; i < 6; ++i) {
+    const double column_norm = design.col(perm(i)).norm();
+    if (!(std::abs(r(i, i)) >= kConditionLimit * column_norm)) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double fxy) {
   return 0.5 * ((1 + fx * fx) * fyy + (1 + fy * fy) * fxx - 2 * fxy * fx * fy) /
@@ -12,7 +35,7 @@ double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double
 QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& points,
                               const std::vector<Neighbour>& neighbours) {
   const Eigen::Index n = static_cast<Eigen::Index>(neighbours.size());
-  if (n == 0) return QuadricFit{origin, 0.0};
+  if (n == 0) return QuadricFit{origin, 0.0, true};
 
   // Covariance as E[x x^T] - mu mu^T. Each entry is summed in neighbour order exactly as the
   // reference's `M = M + neighbor * neighbor.transpose()` does, but in registers.
@@ -68,6 +91,7 @@ QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& point
   out.foot = Vec3{origin[0] + delta(0), origin[1] + delta(1), origin[2] + delta(2)};
   // f = a x^2 + b y^2 + c xy + d x + e y + f: fxx = 2a, fyy = 2b, fxy = c, fx = d, fy = e.
   out.mean_curvature = graph_mean_curvature(c(3), c(4), 2 * c(0), 2 * c(1), c(2));
+  out.underdetermined = n < 6 || !well_conditioned(qr_, design_);
   return out;
 }
 

@@ -14,6 +14,11 @@ namespace qm3d::pointcloud::detail {
 struct QuadricFit {
   Vec3 foot{0, 0, 0};         ///< origin + f n: the origin projected onto the fitted surface
   double mean_curvature = 0;  ///< H at the origin (signed, in inverse coordinate units)
+  /// The six coefficients are not determined by the points, or barely: fewer than six points,
+  /// too few distinct positions, or a design so ill-conditioned (scaled pivot ratio below 1e-7)
+  /// that the solution moves beyond 1e-9 with rounding. The solution is then the QR's "basic"
+  /// one, or its rounding, which differs between Eigen versions (SPEC-PCQM §9.5).
+  bool underdetermined = false;
 };
 
 /// Fits quadrics; holds the Eigen workspaces so that one fitter per thread allocates little.
@@ -23,7 +28,8 @@ struct QuadricFit {
 /// differently), frame t1 = largest, t2 = middle, n = smallest eigenvector, coordinates relative
 /// to the origin, `ColPivHouseholderQR<MatrixXd>` (its basic solution when there are fewer than
 /// six points). With no neighbour at all the result is the origin and H = 0, which is what the
-/// reference's QR returns for an empty system (without its NaN foot point).
+/// reference's QR returns for an empty system (without its NaN foot point); such a fit is
+/// underdetermined too.
 class QuadricFitter {
  public:
   /// `neighbours` index `points`; their order is the summation order.

@@ -82,6 +82,43 @@ TEST(ReadCloud, BinaryPlyColoursAreBytesOver255) {
   }
 }
 
+// SPEC-PCQM §9.1: the reference (tinyply) reads an ASCII value declared `float` as a float32;
+// a value declared `double` keeps its double precision. Meshes keep the double parse (MEPP2).
+TEST(ReadCloud, AsciiFloatPropertiesAreReadAtFloatPrecision) {
+  const auto dir = temp_dir("ascii_float");
+  std::ofstream(dir / "cloud.ply") << "ply\nformat ascii 1.0\nelement vertex 2\n"
+                                      "property float x\nproperty float y\nproperty double z\n"
+                                      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                                      "end_header\n0.1 1.3 0.1 1 2 3\n-2.7 1e-3 0.7 4 5 6\n";
+  const ColoredCloud c = read_cloud(dir / "cloud.ply");
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[0][0], double(0.1f));
+  EXPECT_NE(c.positions[0][0], 0.1);
+  EXPECT_EQ(c.positions[0][1], double(1.3f));
+  EXPECT_EQ(c.positions[0][2], 0.1);  // declared double
+  EXPECT_EQ(c.positions[1][0], double(-2.7f));
+  EXPECT_EQ(c.positions[1][1], double(1e-3f));
+  // The same bytes read as a mesh's vertices keep the double parse.
+  EXPECT_EQ(ply::read(dir / "cloud.ply").positions[0][0], 0.1);
+  EXPECT_EQ(ply::read(dir / "cloud.ply", ply::AsciiFloat::kAsDeclared).positions[0][0],
+            double(0.1f));
+}
+
+TEST(ReadCloud, AsciiFloatOutOfFloatRangeIsANonFiniteCoordinate) {
+  const auto dir = temp_dir("ascii_float_range");
+  std::ofstream(dir / "big.ply") << "ply\nformat ascii 1.0\nelement vertex 1\n"
+                                    "property float x\nproperty float y\nproperty float z\n"
+                                    "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                                    "end_header\n1e39 0 0 1 2 3\n";
+  try {
+    read_cloud(dir / "big.ply");
+    FAIL() << "no error";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("big.ply"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("non-finite"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ReadCloud, AsciiBinaryDoubleAndRgbNamedCopiesGiveTheSameScore) {
   const auto dir = temp_dir("ply");
   const ColoredCloud& ref = cloud(kRefFile);

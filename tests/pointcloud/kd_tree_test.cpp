@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <random>
+#include <limits>
 #include <set>
 
 namespace qm3d::pointcloud::detail {
@@ -105,21 +106,107 @@ TEST(KdTree, KnnOnSmallCloudReturnsEveryPoint) {
                              [](auto& a, auto& b) { return a.distance2 < b.distance2; }));
 }
 
-TEST(KdTree, CombinedSearchEqualsSeparateSearches) {
-  const auto p = random_points(5000, 5);
+// NANOFLANN-1.1.7.md §5's worked example: the 1 x 4 x 4 grid p_i = (0, i / 4, i % 4). The root
+// box spans y and z equally; 1.1.7's middleSplit_ compares the spread along the dim chosen so far
+// (x: 0) and takes z, cuts at 1.5, and two Hoare passes leave the order below. From (0, 0, 1.5),
+// p1 and p2 tie; the midpoint goes to the second child first, so p2 wins. (nanoflann >= 1.2.3
+// splits on y and returns p1.)
+TEST(KdTree, ReproducesNanoflann117OnTheSpecsGrid) {
+  std::vector<Vec3> p;
+  for (int i = 0; i < 16; ++i) p.push_back({0.0, double(i / 4), double(i % 4)});
   const KdTree t(p);
-  std::vector<Neighbour> knn, within, knn2, within2;
-  for (std::size_t q = 0; q < p.size(); q += 11) {
-    for (double r2 : {0.001, 0.05, 0.3}) {
-      t.knn_radius_search(p[q], 20, r2, knn, within);
-      t.knn_search(p[q], 20, knn2);
-      t.radius_search(p[q], r2, within2);
-      expect_same(knn, knn2);
-      sort_by_distance(within);
-      sort_by_distance(within2);
-      expect_same(within, within2);
+  const std::vector<std::uint32_t> order{0, 1, 13, 12, 4, 5, 9, 8, 7, 6, 10, 11, 3, 2, 14, 15};
+  EXPECT_EQ(t.input_index(), order);
+  ASSERT_EQ(t.leaves().size(), 2u);
+  EXPECT_EQ(t.leaves()[0][1], 8u);
+
+  const auto inputs = [&t](const std::vector<Neighbour>& r) {
+    std::vector<std::uint32_t> out;
+    for (const Neighbour& n : r) out.push_back(t.input_index()[n.index]);
+    return out;
+  };
+  std::vector<Neighbour> got;
+  t.knn_search({0, 0, 1.5}, 1, got);
+  EXPECT_EQ(inputs(got), (std::vector<std::uint32_t>{2}));
+  t.knn_search({0, 0, 1.5}, 2, got);
+  EXPECT_EQ(inputs(got), (std::vector<std::uint32_t>{2, 1}));
+  t.radius_search({0, 0, 1.5}, 0.3, got);
+  EXPECT_EQ(inputs(got), (std::vector<std::uint32_t>{2, 1}));
+}
+
+// The rule of NANOFLANN-1.1.7.md §5: list every point in unpruned depth-first order, stable-sort
+// by distance; the first k are the kNN. A radius search with an infinite radius prunes nothing,
+// so it lists every point in that order; the kNN search, which prunes with its shrinking worst
+// distance, must agree with it.
+std::vector<std::uint32_t> dfs_rule(const KdTree& t, const Vec3& q) {
+  std::vector<std::uint32_t> all(t.size());
+  for (std::uint32_t i = 0; i < t.size(); ++i) all[i] = i;
+  std::vector<Neighbour> traversal;
+  t.radius_search(q, std::numeric_limits<double>::infinity(), traversal);
+  std::vector<std::uint32_t> rank(t.size());
+  for (std::size_t r = 0; r < traversal.size(); ++r) rank[traversal[r].index] = std::uint32_t(r);
+  std::stable_sort(all.begin(), all.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const double da = squared_distance(q, t.points()[a]);
+    const double db = squared_distance(q, t.points()[b]);
+    return da < db || (da == db && rank[a] < rank[b]);
+  });
+  return all;
+}
+
+TEST(KdTree, KnnIsTheFirstKOfTheTraversalByDistance) {
+  // Every query on a grid with duplicates meets ties; queries at cell midpoints tie on the
+  // split planes themselves.
+  const auto p = grid_points();
+  const KdTree t(p);
+  std::vector<Neighbour> got;
+  for (std::size_t q = 0; q < p.size(); q += 3) {
+    for (const Vec3& query : {p[q], Vec3{p[q][0] + 0.5, p[q][1], p[q][2] + 0.5}}) {
+      const auto expected = dfs_rule(t, query);
+      for (std::size_t k : {1, 4, 20}) {
+        t.knn_search(query, k, got);
+        ASSERT_EQ(got.size(), k);
+        for (std::size_t i = 0; i < k; ++i) EXPECT_EQ(got[i].index, expected[i]) << q << " " << k;
+      }
     }
   }
+}
+
+TEST(KdTree, RadiusOrderIsTheTraversalOrder) {
+  const auto p = grid_points();
+  const KdTree t(p);
+  std::vector<Neighbour> all, within;
+  for (std::size_t q = 0; q < p.size(); q += 5) {
+    t.radius_search(p[q], std::numeric_limits<double>::infinity(), all);
+    t.radius_search(p[q], 2.5, within);
+    std::size_t next = 0;  // `within` must be `all` filtered by d2 < 2.5, in order
+    for (const Neighbour& n : all) {
+      if (n.distance2 < 2.5) {
+        ASSERT_LT(next, within.size());
+        EXPECT_EQ(within[next++].index, n.index);
+      }
+    }
+    EXPECT_EQ(next, within.size());
+  }
+}
+
+TEST(KdTree, SortedRadiusIsStdSortOfTheTraversal) {
+  const auto p = grid_points();
+  const KdTree t(p);
+  std::vector<Neighbour> got, expected;
+  for (std::size_t q = 0; q < p.size(); q += 5) {
+    t.sorted_radius_search(p[q], 5.0, got);  // about 30 points, many tied: introsort's order
+    t.radius_search(p[q], 5.0, expected);
+    std::sort(expected.begin(), expected.end(),
+              [](const Neighbour& a, const Neighbour& b) { return a.distance2 < b.distance2; });
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].index, expected[i].index);
+  }
+}
+
+TEST(KdTree, HasTies) {
+  EXPECT_FALSE(has_ties({}));
+  EXPECT_FALSE(has_ties({{1, 0}, {2, 1}}));
+  EXPECT_TRUE(has_ties({{1, 0}, {2, 1}, {2, 2}}));
 }
 
 TEST(KdTree, DoesNotDependOnThreadCount) {

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "kd_tree.h"
 #include "pcqm_internal.h"
 #include "qm3d/common/error.h"
 #include "progress_recorder.h"
@@ -26,12 +27,14 @@ using test_data::reference_result;
 using test_data::reference_row;
 using test_data::ReferenceRow;
 
-// Tolerances of the task: PCQM within 1e-6 relative (1e-12 absolute for a reference below
-// 1e-12), the features and every per-point value within 1e-6 absolute.
+// Tolerances: PCQM within 1e-6 relative plus 1e-14 absolute (scores of identical clouds are
+// rounding noise around 0), the features within 1e-6 absolute, every per-point value of the
+// reference's dumps within 1e-9 relative to max(1, |value|).
 constexpr double kScoreRelTol = 1e-6;
+constexpr double kScoreAbsTol = 1e-14;
 constexpr double kTinyScore = 1e-12;
 constexpr double kFeatureAbsTol = 1e-6;
-constexpr double kPerPointAbsTol = 1e-6;
+constexpr double kPerPointTol = 1e-9;
 
 PcqmOptions test_options() {
   PcqmOptions o;
@@ -40,21 +43,22 @@ PcqmOptions test_options() {
 }
 
 void expect_score_near(double actual, double expected) {
-  if (std::abs(expected) < kTinyScore) {
-    EXPECT_NEAR(actual, expected, kTinyScore);
-  } else {
-    EXPECT_LE(std::abs(actual - expected), kScoreRelTol * std::abs(expected))
-        << "actual " << actual << " expected " << expected;
-  }
+  EXPECT_LE(std::abs(actual - expected), kScoreRelTol * std::abs(expected) + kScoreAbsTol)
+      << "actual " << actual << " expected " << expected;
 }
 
 // ---- every row of pcqm_reference.csv ----
 
-class PcqmReferenceTest : public ::testing::TestWithParam<ReferenceRow> {};
+bool warns_of_underdetermined_fits(const PcqmResult& r) {
+  for (const std::string& w : r.warnings) {
+    if (w.find("underdetermined") != std::string::npos) return true;
+  }
+  return false;
+}
 
-TEST_P(PcqmReferenceTest, MatchesReferenceImplementation) {
-  const ReferenceRow& row = GetParam();
-  const PcqmResult& r = reference_result(row);
+// The score and features of `r` against one row of a reference table.
+void expect_matches_row(const PcqmResult& r, const ReferenceRow& row, const std::string& table) {
+  SCOPED_TRACE(table);
   expect_score_near(r.score, row.pcqm);
   double max_feature_diff = 0;
   for (std::size_t k = 0; k < kNumFeatures; ++k) {
@@ -62,12 +66,54 @@ TEST_P(PcqmReferenceTest, MatchesReferenceImplementation) {
     max_feature_diff =
         std::max(max_feature_diff, std::abs(r.ref_to_dist.features[k] - row.features[k]));
   }
-  std::cout << "[ pcqm     ] " << row.name << ": PCQM " << r.score << " (reference " << row.pcqm
-            << ", rel. diff " << std::abs(r.score - row.pcqm) / std::max(std::abs(row.pcqm), 1e-300)
+  std::cout << "[ pcqm     ] " << row.name << " (" << table << "): PCQM " << r.score
+            << " (reference " << row.pcqm << ", rel. diff "
+            << std::abs(r.score - row.pcqm) / std::max(std::abs(row.pcqm), 1e-300)
             << "), max |F diff| " << max_feature_diff << "\n";
+}
+
+class PcqmReferenceTest : public ::testing::TestWithParam<ReferenceRow> {};
+
+// The voxel case `name` scored by the reference rebuilt with Debian's Eigen 3.4, if any.
+const ReferenceRow* eigen34_row(const std::string& name) {
+  for (const ReferenceRow& r : test_data::voxel_rows_eigen34()) {
+    if (r.name == name) return &r;
+  }
+  return nullptr;
+}
+
+bool rows_agree(const ReferenceRow& a, const ReferenceRow& b) {
+  if (std::abs(a.pcqm - b.pcqm) > kScoreRelTol * std::abs(a.pcqm) + kScoreAbsTol) return false;
+  for (std::size_t k = 0; k < kNumFeatures; ++k) {
+    if (std::abs(a.features[k] - b.features[k]) > kFeatureAbsTol) return false;
+  }
+  return true;
+}
+
+// Every row matches the reference as shipped, except where the shipped reference's own value
+// depends on its Eigen 3.3.5 (SPEC-PCQM §9.5): rows where the reference rebuilt with Debian's
+// Eigen 3.4 gives another value. There qm3d must warn of underdetermined fits. Every voxel row
+// matches the reference rebuilt with Eigen 3.4.
+TEST_P(PcqmReferenceTest, MatchesReferenceImplementation) {
+  const ReferenceRow& row = GetParam();
+  const PcqmResult& r = reference_result(row);
+  const ReferenceRow* rebuilt = eigen34_row(row.name);
+  if (rebuilt != nullptr) expect_matches_row(r, *rebuilt, "reference with Eigen 3.4");
+  if (rebuilt != nullptr && !rows_agree(row, *rebuilt)) {
+    EXPECT_TRUE(warns_of_underdetermined_fits(r));
+    std::cout << "[ pcqm     ] " << row.name << ": shipped reference " << row.pcqm
+              << ", with Eigen 3.4 " << rebuilt->pcqm << ", qm3d " << r.score
+              << ": the reference's value depends on its Eigen version here\n";
+  } else {
+    expect_matches_row(r, row, "shipped reference");
+  }
   EXPECT_FALSE(r.dist_to_ref.has_value());
-  EXPECT_TRUE(r.warnings.empty());
-  EXPECT_EQ(r.ref_to_dist.per_point.size(), cloud(row.reference).size());
+  for (const std::string& w : r.warnings) {  // only the box quirk and underdetermined fits
+    EXPECT_TRUE(w.find("|min| + |max|") != std::string::npos ||
+                w.find("underdetermined") != std::string::npos)
+        << w;
+  }
+  EXPECT_EQ(r.ref_to_dist.per_point.size(), cloud(row.dir, row.reference).size());
 }
 
 std::string row_test_name(const ::testing::TestParamInfo<ReferenceRow>& info) {
@@ -80,12 +126,65 @@ std::string row_test_name(const ::testing::TestParamInfo<ReferenceRow>& info) {
 
 INSTANTIATE_TEST_SUITE_P(AllRows, PcqmReferenceTest,
                          ::testing::ValuesIn(test_data::reference_rows()), row_test_name);
+// Voxelised clouds (10-bit integer grid): nearly every search meets equal distances, so these
+// rows match only with the reference's tree and its order of ties (kd_tree.h).
+INSTANTIATE_TEST_SUITE_P(VoxelRows, PcqmReferenceTest,
+                         ::testing::ValuesIn(test_data::voxel_rows()), row_test_name);
 
-TEST(PcqmReferenceData, HasAllEighteenRows) { EXPECT_EQ(test_data::reference_rows().size(), 18u); }
+TEST(PcqmReferenceData, HasAllRows) {
+  EXPECT_EQ(test_data::reference_rows().size(), 18u);
+  EXPECT_EQ(test_data::voxel_rows().size(), 18u);
+  ASSERT_EQ(test_data::voxel_rows_eigen34().size(), 18u);
+  for (const ReferenceRow& row : test_data::voxel_rows()) EXPECT_NE(eigen34_row(row.name), nullptr);
+}
 
 TEST(PcqmReferenceData, PerPointScoresAverageToTheScore) {
+  // The score pools similarities as the reference does (1 - mean s); the per-point values are
+  // 1 - s: the two agree to rounding.
   const PcqmResult& r = reference_result(reference_row("def_sphere_50k_gnoise0.005"));
-  EXPECT_NEAR(mean_pool(r.ref_to_dist.per_point), r.score, 1e-15);
+  EXPECT_NEAR(mean_pool(r.ref_to_dist.per_point), r.score, 1e-14);
+}
+
+std::string warning_containing(const PcqmResult& r, const std::string& text) {
+  for (const std::string& w : r.warnings) {
+    if (w.find(text) != std::string::npos) return w;
+  }
+  return "";
+}
+
+// On the coarse voxel case most curvature fits are underdetermined at the default radius; the
+// warning says so and names a radius under which they are not (measured, not guessed).
+TEST(PcqmWarnings, UnderdeterminedFitsAreReportedWithARadiusThatAvoidsThem) {
+  const ReferenceRow& row = reference_row("def_vox1_requant8");
+  const std::string warning =
+      warning_containing(reference_result(row), "underdetermined curvature fit");
+  std::cout << "[ warning  ] " << warning << "\n";
+  EXPECT_NE(warning.find("% of the reference cloud's points"), std::string::npos) << warning;
+  const std::string lead = "with a curvature radius of ";
+  const auto at = warning.find(lead);
+  ASSERT_NE(at, std::string::npos) << warning;
+  const double suggested = std::stod(warning.substr(at + lead.size()));
+  EXPECT_GT(suggested, 0.004);
+  PcqmOptions o = test_data::options_for(row);
+  o.radius_rel = suggested;
+  const PcqmResult wider = compute_pcqm(cloud(row.dir, row.reference), cloud(row.dir, row.distorted), o);
+  EXPECT_EQ(warning_containing(wider, "underdetermined curvature fit"), "");
+}
+
+// Duplicated points make the correspondence fits underdetermined; a larger knn avoids it.
+TEST(PcqmWarnings, UnderdeterminedCorrespondencesAreReportedWithAKnnThatAvoidsThem) {
+  const ReferenceRow& row = reference_row("def_vox1_requant8dup");
+  const std::string warning =
+      warning_containing(reference_result(row), "underdetermined correspondence fit");
+  std::cout << "[ warning  ] " << warning << "\n";
+  const std::string lead = "with knn ";
+  const auto at = warning.find(lead);
+  ASSERT_NE(at, std::string::npos) << warning;
+  PcqmOptions o = test_data::options_for(row);
+  o.knn = std::stoi(warning.substr(at + lead.size()));
+  EXPECT_GT(o.knn, 20);
+  const PcqmResult wider = compute_pcqm(cloud(row.dir, row.reference), cloud(row.dir, row.distorted), o);
+  EXPECT_EQ(warning_containing(wider, "underdetermined correspondence fit"), "");
 }
 
 // ---- per-point values against the reference's dumps (first 2000 points) ----
@@ -125,7 +224,8 @@ enum Column {
 };
 
 std::vector<std::array<double, kNumColumns>> read_per_point(const std::string& case_name) {
-  std::ifstream in(test_data::pcqm_dir() / "per_point" / (case_name + "_first2000.txt"));
+  const ReferenceRow& row = test_data::reference_row(case_name);
+  std::ifstream in(row.dir / "per_point" / (case_name + "_first2000.txt"));
   std::vector<std::array<double, kNumColumns>> rows;
   std::string line;
   std::getline(in, line);  // header
@@ -180,7 +280,7 @@ TEST_P(PcqmPerPointTest, FirstPointsMatchReferenceDump) {
   const ReferenceRow& row = reference_row(GetParam());
   const auto expected = read_per_point(row.name);
   ASSERT_EQ(expected.size(), 2000u);
-  const ColoredCloud& ref = cloud(row.reference);
+  const ColoredCloud& ref = cloud(row.dir, row.reference);
   const PcqmOptions o = test_data::options_for(row);
   detail::DirectionParams params;
   params.max_dim = detail::reference_max_dim(ref.positions);
@@ -190,25 +290,54 @@ TEST_P(PcqmPerPointTest, FirstPointsMatchReferenceDump) {
   params.diagnostics = true;
   const auto table = Lab2000hlTable::shared(test::tables_dir());
   const detail::DirectionOutput out =
-      detail::compute_direction(ref, cloud(row.distorted), params, *table);
+      detail::compute_direction(ref, cloud(row.dir, row.distorted), params, *table);
 
+  // Where the shipped reference's value depends on its Eigen version (its row differs from the
+  // reference rebuilt with Eigen 3.4, SPEC-PCQM §9.5), the values an underdetermined quadric fit
+  // feeds are left out: a point's curvatures when their fit is underdetermined, its p-hat when
+  // that fit is; its stage-2 features when a point of its statistics neighbourhood has such a
+  // curvature (f1..f3) or p-hat (the weights w2: f1..f8). Everything else must match.
+  const ReferenceRow* rebuilt = eigen34_row(row.name);
+  const bool eigen_dependent = rebuilt != nullptr && !rows_agree(row, *rebuilt);
+  std::vector<std::uint8_t> underdetermined = out.diagnostics.underdetermined;
+  if (!eigen_dependent) underdetermined.assign(underdetermined.size(), 0);
+  const detail::KdTree tree(ref.positions);
+  const double stat_radius = o.radius_rel * params.max_dim * o.radius_factor;
+  std::vector<detail::Neighbour> neighbourhood;
+  std::size_t left_out = 0;
   std::array<double, kNumColumns> max_diff{};
   for (std::size_t i = 0; i < expected.size(); ++i) {
+    tree.radius_search(ref.positions[i], std::pow(stat_radius, 2.0), neighbourhood);
+    std::uint8_t near = 0;
+    for (const auto& n : neighbourhood) near |= underdetermined[tree.input_index()[n.index]];
     const auto ours = our_columns(out, ref, i);
     for (int c = 0; c < kNumColumns; ++c) {
-      const double diff = std::abs(ours[c] - expected[i][c]);
+      const bool fed_by_fit =
+          ((c == kCurvR || c == kCurvD) && (underdetermined[i] & detail::kCurvatureFit)) ||
+          ((c == kProjX || c == kProjY || c == kProjZ) && (underdetermined[i] & detail::kMatchFit)) ||
+          ((c == kGeomL || c == kGeomC || c == kGeomS) && near != 0) ||
+          (c >= kColL && (near & detail::kMatchFit));
+      if (fed_by_fit) {
+        ++left_out;
+        continue;
+      }
+      const double diff = std::abs(ours[c] - expected[i][c]) / std::max(1.0, std::abs(expected[i][c]));
       max_diff[c] = std::max(max_diff[c], diff);
-      EXPECT_LE(diff, kPerPointAbsTol) << row.name << " point " << i << " column " << c << ": ours "
-                                       << ours[c] << " reference " << expected[i][c];
+      EXPECT_LE(diff, kPerPointTol) << row.name << " point " << i << " column " << c << ": ours "
+                                    << ours[c] << " reference " << expected[i][c];
     }
   }
-  std::cout << "[ per-point] " << row.name << " max |diff| per column:";
+  std::cout << "[ per-point] " << row.name << " max relative diff per column:";
   for (double m : max_diff) std::cout << " " << m;
-  std::cout << "\n";
+  std::cout << " (" << left_out << " of " << expected.size() * kNumColumns
+            << " values fed by underdetermined fits left out)\n";
+  EXPECT_LT(left_out, expected.size() * kNumColumns / 2);
 }
 
 INSTANTIATE_TEST_SUITE_P(Dumps, PcqmPerPointTest,
-                         ::testing::Values("def_sphere_50k_cnoise10", "r02_sphere_50k_gnoise0.005"),
+                         ::testing::Values("def_sphere_50k_cnoise10", "r02_sphere_50k_gnoise0.005",
+                                           "def_vox1_requant8", "def_vox1_requant8dup",
+                                           "r02_vox1_gnoise1"),
                          [](const auto& info) {
                            std::string s = info.param;
                            std::replace(s.begin(), s.end(), '.', '_');
@@ -269,19 +398,29 @@ ColoredCloud translated(ColoredCloud c, const Vec3& t) {
   return c;
 }
 
+// The warnings about the bounding-box quirk (a 5000-point subset of the sphere also gets the
+// underdetermined-fit warnings at the default radius).
+std::vector<std::string> box_warnings(const PcqmResult& r) {
+  std::vector<std::string> out;
+  for (const std::string& w : r.warnings) {
+    if (w.find("box size |min| + |max|") != std::string::npos) out.push_back(w);
+  }
+  return out;
+}
+
 TEST(Pcqm, ReferenceBoxDependsOnTranslationAndWarns) {
   const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 5000);
   const ColoredCloud dist = head(cloud("sphere_50k_cnoise10.ply"), 5000);
   const PcqmResult centred = compute_pcqm(ref, dist, test_options());
-  EXPECT_TRUE(centred.warnings.empty());
+  EXPECT_TRUE(box_warnings(centred).empty());
   const Vec3 shift{10, 0, 0};
   const PcqmResult shifted =
       compute_pcqm(translated(ref, shift), translated(dist, shift), test_options());
   // |min x| + |max x| = 9 + 11 = 20 instead of 2 (SPEC-PCQM 1.3).
   EXPECT_NEAR(shifted.ref_to_dist.bbox_max_side, 20.0, 1e-3);
   EXPECT_GT(std::abs(shifted.score - centred.score), 0.1 * centred.score);
-  ASSERT_EQ(shifted.warnings.size(), 1u);
-  EXPECT_NE(shifted.warnings[0].find("longest side"), std::string::npos) << shifted.warnings[0];
+  ASSERT_EQ(box_warnings(shifted).size(), 1u);
+  EXPECT_NE(box_warnings(shifted)[0].find("longest side"), std::string::npos);
 }
 
 TEST(Pcqm, ExtentBoxIsTranslationInvariant) {
@@ -292,7 +431,7 @@ TEST(Pcqm, ExtentBoxIsTranslationInvariant) {
   const PcqmResult centred = compute_pcqm(ref, dist, o);
   const Vec3 shift{10, -3, 0.5};
   const PcqmResult shifted = compute_pcqm(translated(ref, shift), translated(dist, shift), o);
-  EXPECT_TRUE(shifted.warnings.empty());
+  EXPECT_TRUE(box_warnings(shifted).empty());
   EXPECT_DOUBLE_EQ(shifted.ref_to_dist.bbox_max_side, centred.ref_to_dist.bbox_max_side);
   expect_score_near(shifted.score, centred.score);
 }

@@ -20,15 +20,20 @@ std::vector<std::string> split(const std::string& line, char sep) {
   return out;
 }
 
-std::vector<ReferenceRow> read_rows() {
-  std::ifstream in(pcqm_dir() / "pcqm_reference.csv");
+// Rows of a reference table; `dir` holds the clouds it names. Lines starting with '#' are
+// comments.
+std::vector<ReferenceRow> read_rows(const std::filesystem::path& table,
+                                    const std::filesystem::path& dir) {
+  std::ifstream in(table);
   std::vector<ReferenceRow> rows;
   std::string line;
-  if (!std::getline(in, line)) return rows;  // header
+  // Comment lines, then the header (skipped with them), then the rows.
+  while (std::getline(in, line) && !line.empty() && line[0] == '#') continue;
   while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '#') continue;
     const auto c = split(line, ';');
     if (c.size() < 13) continue;
-    ReferenceRow r{c[0], c[1], c[2], c[3], {}, std::stod(c[12])};
+    ReferenceRow r{dir, c[0], c[1], c[2], c[3], {}, std::stod(c[12])};
     for (std::size_t k = 0; k < kNumFeatures; ++k) r.features[k] = std::stod(c[4 + k]);
     rows.push_back(r);
   }
@@ -47,17 +52,33 @@ struct TempDirs {
 }  // namespace
 
 std::filesystem::path pcqm_dir() { return test::reference_dir() / "pcqm"; }
+std::filesystem::path voxel_dir() { return test::reference_dir() / "voxel"; }
 
 const std::vector<ReferenceRow>& reference_rows() {
-  static const std::vector<ReferenceRow> rows = read_rows();
+  static const std::vector<ReferenceRow> rows =
+      read_rows(pcqm_dir() / "pcqm_reference.csv", pcqm_dir());
+  return rows;
+}
+
+const std::vector<ReferenceRow>& voxel_rows() {
+  static const std::vector<ReferenceRow> rows =
+      read_rows(voxel_dir() / "pcqm_voxel_reference.csv", voxel_dir());
+  return rows;
+}
+
+const std::vector<ReferenceRow>& voxel_rows_eigen34() {
+  static const std::vector<ReferenceRow> rows = read_rows(
+      std::filesystem::path(QM3D_TEST_DATA_DIR) / "pcqm_voxel_reference_eigen34.csv", voxel_dir());
   return rows;
 }
 
 const ReferenceRow& reference_row(const std::string& name) {
-  for (const auto& r : reference_rows()) {
-    if (r.name == name) return r;
+  for (const auto* rows : {&reference_rows(), &voxel_rows()}) {
+    for (const auto& r : *rows) {
+      if (r.name == name) return r;
+    }
   }
-  throw std::runtime_error("no row " + name + " in pcqm_reference.csv");
+  throw std::runtime_error("no row " + name + " in the PCQM reference tables");
 }
 
 PcqmOptions options_for(const ReferenceRow& row) {
@@ -75,12 +96,15 @@ PcqmOptions options_for(const ReferenceRow& row) {
   return o;
 }
 
-const ColoredCloud& cloud(const std::string& file_name) {
-  static std::map<std::string, ColoredCloud> cache;
-  auto it = cache.find(file_name);
-  if (it == cache.end()) it = cache.emplace(file_name, read_cloud(pcqm_dir() / file_name)).first;
+const ColoredCloud& cloud(const std::filesystem::path& dir, const std::string& file_name) {
+  static std::map<std::filesystem::path, ColoredCloud> cache;
+  const std::filesystem::path path = dir / file_name;
+  auto it = cache.find(path);
+  if (it == cache.end()) it = cache.emplace(path, read_cloud(path)).first;
   return it->second;
 }
+
+const ColoredCloud& cloud(const std::string& file_name) { return cloud(pcqm_dir(), file_name); }
 
 const PcqmResult& reference_result(const ReferenceRow& row) {
   static std::map<std::string, PcqmResult> cache;
@@ -88,7 +112,8 @@ const PcqmResult& reference_result(const ReferenceRow& row) {
   if (it == cache.end()) {
     it = cache
              .emplace(row.name,
-                      compute_pcqm(cloud(row.reference), cloud(row.distorted), options_for(row)))
+                      compute_pcqm(cloud(row.dir, row.reference), cloud(row.dir, row.distorted),
+                                   options_for(row)))
              .first;
   }
   return it->second;

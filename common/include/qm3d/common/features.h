@@ -77,9 +77,18 @@ inline constexpr FeatureConventions kMsdm2Conventions{
 
 /// f1..f3 of a neighbourhood (the other five entries are left 0).
 FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureConventions& conv);
+/// s4..s8 of a neighbourhood: the similarities whose complements 1 - s are f4..f8 (entries
+/// 3..7; the first three entries are left 0).
+FeatureVector color_similarities(const NeighbourhoodSamples& s, const FeatureConventions& conv);
 /// f4..f8 of a neighbourhood (the first three entries are left 0).
 FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConventions& conv);
 /// All eight features of a neighbourhood. `s` must not be empty.
 FeatureVector local_features(const NeighbourhoodSamples& s, const FeatureConventions& conv);
+/// f1..f3 followed by s4..s8 (the similarities, not their complements): what PCQM pools
+/// (pooling.h, mean_features_from_similarities). `s` must not be empty.
+FeatureVector local_features_and_similarities(const NeighbourhoodSamples& s,
+                                              const FeatureConventions& conv);
+/// Turns f1..f3, s4..s8 into f1..f8 (entries 3..7 become 1 - s, as color_features computes them).
+void similarities_to_features(FeatureVector& v);
 
 }  // namespace qm3d

@@ -2,7 +2,8 @@
 // scalar type, every error prefixed with the file name and specific.
 //
 // Why our own reader: to match the reference scores the positions of an ASCII PLY must be parsed
-// at double precision whatever type the header declares (MEPP2 does so), colours may be uchar,
+// at double precision whatever type the header declares for meshes (MEPP2 does so) and at the
+// declared precision for clouds (MEPP-team/PCQM does so), colours may be uchar,
 // ushort or float and named red/green/blue, r/g/b or diffuse_*, and a header that claims more
 // elements than the file can hold must fail before anything is allocated.
 #pragma once
@@ -58,12 +59,23 @@ struct Content {
 /// Parses the header of `bytes` (the file's content); `name` is used in error messages.
 Header parse_header(const std::string& bytes, const std::string& name);
 
+/// How ASCII values of properties declared `float` are parsed (binary files hold the declared
+/// type anyway).
+enum class AsciiFloat {
+  /// At double precision whatever the declared type: what MEPP2 does for meshes.
+  kDouble,
+  /// As float32, then widened: what MEPP-team/PCQM's tinyply does for clouds (SPEC-PCQM §9.1);
+  /// the value can differ from the double parse by half a float ulp.
+  kAsDeclared,
+};
+
 /// Reads the vertex positions, colours and faces of a PLY file. Throws InputError / FormatError
 /// naming the file on any problem (truncation, bad values, face index out of range, ...).
-Content read(const std::filesystem::path& path);
+Content read(const std::filesystem::path& path, AsciiFloat ascii_float = AsciiFloat::kDouble);
 
 /// Reads PLY content already in memory.
-Content parse(const std::string& bytes, const std::string& name);
+Content parse(const std::string& bytes, const std::string& name,
+              AsciiFloat ascii_float = AsciiFloat::kDouble);
 
 /// What to write: positions, optional 8-bit colours, optional float scalar per vertex, faces.
 struct WriteData {

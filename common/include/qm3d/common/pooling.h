@@ -17,6 +17,12 @@ double minkowski_pool(const std::vector<double>& values, double p);
 /// Component-wise mean of per-element feature vectors, summed in element order.
 FeatureVector mean_features(const std::vector<FeatureVector>& per_element);
 
+/// MEPP-team/PCQM's pooling (`write_mean_features`): from per-element f1..f3 and s4..s8 (the
+/// similarities, features.h local_features_and_similarities), F1..F3 = (sum f) / n and
+/// F4..F8 = 1 - (sum s) / n, summed in element order. Differs from mean_features of 1 - s by
+/// rounding only (about 1e-14 absolute), visible on near-zero scores. Empty -> all 0.
+FeatureVector mean_features_from_similarities(const std::vector<FeatureVector>& per_element);
+
 /// A metric's score as a weighted sum of its (pooled) features.
 struct LinearModel {
   std::string metric;       ///< "cmdm", "pcqm", ...
