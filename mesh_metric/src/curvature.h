@@ -18,7 +18,8 @@ enum class CurvatureVariant {
 };
 
 /// maxdim * (|k1| + |k2|) / 2 per vertex, where k1, k2 are the two principal curvatures of
-/// largest magnitude of the tensor accumulated within `radius` (SPEC-CMDM 1.5 step 7).
+/// largest magnitude of the tensor accumulated within `radius` (SPEC-CMDM 1.5 step 7); 0 at a
+/// vertex whose tensor reaches an edge marked kVoidsTensor (the mesh's DegenerateEdges rule).
 /// Parallel over vertices; the result does not depend on the thread count.
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
                                         CurvatureVariant variant);

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "vec3_ops.h"
 
@@ -52,12 +51,13 @@ double beta_with_replacement(const DihedralInput& m, std::uint32_t v, std::uint3
   return 0.0;
 }
 
-// Signed dihedral angle of the edge of half-edge k, as MEPP2 computes it (SPEC-CMDM 1.5 step 4);
-// NaN when the edge must be skipped (a collapsed face).
-double edge_beta(const DihedralInput& m, std::uint32_t v, std::uint32_t k, const Vec3& vec,
-                 double len) {
+// Signed dihedral angle of the edge of half-edge k (length len > 0), as curvature_cmdm.hpp
+// computes it (SPEC-CMDM 1.5 step 4); kNoContribution when the edge must be skipped (a collapsed
+// face).
+double repaired_beta(const DihedralInput& m, std::uint32_t v, std::uint32_t k, const Vec3& vec,
+                     double len) {
   const std::int32_t f1 = m.rings.face[k], f2 = m.rings.opposite_face[k];
-  if (face_collapsed(m, f1) || face_collapsed(m, f2)) return std::numeric_limits<double>::quiet_NaN();
+  if (face_collapsed(m, f1) || face_collapsed(m, f2)) return kNoContribution;
   const Vec3& n1 = m.face_normals[f1];
   const Vec3& n2 = m.face_normals[f2];
   const bool nan1 = has_nan(n1), nan2 = has_nan(n2);
@@ -70,20 +70,35 @@ double edge_beta(const DihedralInput& m, std::uint32_t v, std::uint32_t k, const
   return beta_with_replacement(m, v, k, vec, len, /*replace_second=*/nan2);
 }
 
+// The same angle as MEPP2's generic curvature.hpp computes it, with no special case: where that
+// code gets NaN (a zero-length edge: 0 / 0; a NaN face normal), kVoidsTensor.
+double generic_beta(const DihedralInput& m, std::uint32_t k, const Vec3& vec, double len) {
+  const Vec3& n1 = m.face_normals[m.rings.face[k]];
+  const Vec3& n2 = m.face_normals[m.rings.opposite_face[k]];
+  if (len == 0 || has_nan(n1) || has_nan(n2)) return kVoidsTensor;
+  return asin_clamped(dot(cross(n1, n2), vec) / len);
+}
+
+double edge_beta(const DihedralInput& m, DegenerateEdges rule, std::uint32_t v, std::uint32_t k) {
+  const Vec3 edge = sub(m.positions[m.rings.source[k]], m.positions[v]);
+  const double len = norm(edge);
+  if (rule == DegenerateEdges::kVoidTensor) return generic_beta(m, k, edge, len);
+  // A zero-length edge never crosses the sphere, so curvature_cmdm.hpp never uses its angle.
+  return len > 0 ? repaired_beta(m, v, k, edge, len) : 0.0;
+}
+
 }  // namespace
 
-std::vector<double> dihedral_angles(const DihedralInput& m) {
+std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule) {
   const RingFaces& r = m.rings;
-  std::vector<double> beta(r.source.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> beta(r.source.size(), kNoContribution);
   const auto n = static_cast<std::int64_t>(r.offsets.size()) - 1;
 #pragma omp parallel for schedule(dynamic, 1024)
   for (std::int64_t vi = 0; vi < n; ++vi) {
     const auto v = static_cast<std::uint32_t>(vi);
     for (std::uint32_t k = r.offsets[v]; k < r.offsets[v + 1]; ++k) {
       if (r.face[k] == kNoFace || r.opposite_face[k] == kNoFace) continue;  // border edge
-      const Vec3 edge = sub(m.positions[r.source[k]], m.positions[v]);
-      const double len = norm(edge);
-      beta[k] = len > 0 ? edge_beta(m, v, k, edge, len) : 0.0;
+      beta[k] = edge_beta(m, rule, v, k);
     }
   }
   return beta;

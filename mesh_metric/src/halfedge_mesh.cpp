@@ -5,12 +5,11 @@
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 
-#include <cmath>
 #include <limits>
 #include <map>
 
-#include "dihedral.h"
 #include "qm3d/common/error.h"
+#include "vec3_ops.h"
 
 namespace qm3d::mesh::detail {
 namespace {
@@ -92,10 +91,8 @@ RingFaces extract_rings(const SurfaceMesh& sm) {
 }  // namespace
 
 Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const Vec3 w{c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-  const Vec3 n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const Vec3 n = cross(sub(c, b), sub(a, b));
+  const double len = norm(n);
   if (len == 0.0) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return {nan, nan, nan};
@@ -134,7 +131,8 @@ void valid_triangles(const ColoredMesh& mesh, const std::string& name, HalfedgeM
 
 }  // namespace
 
-HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name) {
+HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name,
+                                 DegenerateEdges degenerate_edges) {
   HalfedgeMesh out;
   out.positions = view_of(mesh.positions);
   out.input_vertex.resize(mesh.positions.size());
@@ -153,12 +151,15 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
   }
   RingFaces rings = extract_rings(sm);
   sm.clear();
+  // A triangle's vertices in the order MEPP2 sees them: its reader adds each face with
+  // CGAL::Euler::add_face in the file's order, whose halfedge(f) points to the first vertex.
   std::vector<Vec3> normals(out.triangles.size());
   for (std::size_t f = 0; f < out.triangles.size(); ++f) {
     const Triangle& t = out.triangles[f];
     normals[f] = face_normal(out.positions[t[0]], out.positions[t[1]], out.positions[t[2]]);
   }
-  out.rings.dihedral = dihedral_angles({out.positions.ptr, out.triangles.ptr, normals, rings});
+  out.rings.dihedral =
+      dihedral_angles({out.positions.ptr, out.triangles.ptr, normals, rings}, degenerate_edges);
   out.rings.offsets = std::move(rings.offsets);
   out.rings.source = std::move(rings.source);
   return out;

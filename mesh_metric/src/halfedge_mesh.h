@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "dihedral.h"
 #include "qm3d/common/types.h"
 
 namespace qm3d::mesh::detail {
@@ -14,8 +15,9 @@ namespace qm3d::mesh::detail {
 struct VertexRings {
   std::vector<std::uint32_t> offsets;  ///< #V + 1
   std::vector<std::uint32_t> source;   ///< w of each incoming half-edge
-  /// Signed dihedral angle of the edge (dihedral.h); NaN when the edge never contributes to the
-  /// curvature tensor (border edge, collapsed face).
+  /// Signed dihedral angle of the edge under the mesh's DegenerateEdges rule (dihedral.h);
+  /// kNoContribution when the edge never contributes to the curvature tensor, kVoidsTensor when
+  /// it voids the tensor of the vertices whose curvature estimate reaches it.
   std::vector<double> dihedral;
 
   std::uint32_t begin(std::uint32_t v) const { return offsets[v]; }
@@ -56,12 +58,17 @@ struct HalfedgeMesh {
   std::vector<Triangle> owned_triangles;
 };
 
-/// Builds the connectivity. Faces with a repeated vertex are dropped with a warning;
-/// non-manifold configurations are repaired by duplicating vertices (CGAL's
-/// orient_polygon_soup), with a warning. `name` names the mesh in messages.
-HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name);
+/// Builds the connectivity and the edges' dihedral angles under `degenerate_edges`. Faces with a
+/// repeated vertex are dropped with a warning; non-manifold configurations are repaired by
+/// duplicating vertices (CGAL's orient_polygon_soup), with a warning. `name` names the mesh in
+/// messages.
+HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name,
+                                 DegenerateEdges degenerate_edges);
 
-/// Unit normal of triangle (a, b, c); NaN components when it is degenerate.
+/// Unit normal of face (a, b, c) as MEPP2 computes it: calculate_face_normal.hpp takes the
+/// face's first vertex a as p0 and returns CGAL::unit_normal(b, c, a) = (c - b) x (a - b),
+/// divided by its length; all components NaN when that cross product is exactly zero. The order
+/// matters: on nearly collinear triangles another order rounds to zero, or not, elsewhere.
 Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace qm3d::mesh::detail

@@ -46,10 +46,10 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
 }
 
 PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
-                     bool uses_color) {
+                     const MultiscaleDefinition& def) {
   PreparedMesh p;
-  p.mesh = build_halfedge_mesh(input, name);
-  if (uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
+  p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges);
+  if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.bbox_max_side = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
   return p;
@@ -191,9 +191,9 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
   progress.begin("connectivity");
   // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
   auto ref_task = std::async(std::launch::async, [&] {
-    return prepare(reference, "reference mesh", run, def.uses_color);
+    return prepare(reference, "reference mesh", run, def);
   });
-  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def.uses_color);
+  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def);
   const PreparedMesh ref = ref_task.get();
   MeshMetricResult result;
   for (const auto* m : {&ref.mesh, &dist.mesh}) {

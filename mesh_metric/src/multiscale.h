@@ -21,6 +21,7 @@ namespace qm3d::mesh::detail {
 struct MultiscaleDefinition {
   const char* name;                    ///< "CMDM", "MSDM2" (for messages)
   CurvatureVariant curvature;
+  DegenerateEdges degenerate_edges;    ///< curvature next to zero-length edges / zero-area faces
   double first_radius;                 ///< rc at the first scale (fraction of BB)
   double radius_step;                  ///< rc increment per scale
   double neighbourhood_factor;         ///< neighbourhood radius h = factor * rc * BB
@@ -34,18 +35,25 @@ struct MultiscaleDefinition {
 // The two metrics side by side: everything that differs between them, besides their pooling.
 
 /// MEPP2 process_CMDM_multires (SPEC-CMDM 1.4-1.8): rc = 0.001, +0.0005 per scale; curvature
-/// radius rc BB from crossing edges only; neighbourhood h = 3 rc BB, sigma = h / 3; Heron
-/// distances from the projected point; ">= 0" walk test; colour; w1 covariances clamped at 0.
+/// radius rc BB from crossing edges only, with curvature_cmdm.hpp's replacement normals next to
+/// collinear faces; neighbourhood h = 3 rc BB, sigma = h / 3; Heron distances from the projected
+/// point; ">= 0" walk test; colour; w1 covariances clamped at 0.
 inline constexpr MultiscaleDefinition kCmdmDefinition{
-    "CMDM", CurvatureVariant::kCmdm, 0.001, 0.0005, 3.0, 3.0, HeronAnchor::kProjectedPoint,
-    /*strict_outward_test=*/false, /*uses_color=*/true, kCmdmConventions};
+    "CMDM", CurvatureVariant::kCmdm, DegenerateEdges::kRepaired, 0.001, 0.0005, 3.0, 3.0,
+    HeronAnchor::kProjectedPoint, /*strict_outward_test=*/false, /*uses_color=*/true,
+    kCmdmConventions};
 
 /// MEPP2 process_msdm2_multires (SPEC-CMDM 2): rc = 0.002, +0.001 per scale; generic curvature
 /// (every edge in the ball); neighbourhood h = 5 rc BB, sigma = h / 2; Heron distances from the
 /// distorted vertex itself; "> 0" walk test; no colour; mixed-weight unclamped covariance.
+/// Degenerate geometry (SPEC-CMDM §MSDM2-degenerate): the generic curvature code has no special
+/// case for it, so a vertex whose curvature ball, at a given scale, takes in a non-border edge of
+/// zero length or an edge of a zero-area face (NaN normal) gets a NaN tensor, its eigen-solver
+/// fails and its curvature is 0 at that scale.
 inline constexpr MultiscaleDefinition kMsdm2Definition{
-    "MSDM2", CurvatureVariant::kGeneric, 0.002, 0.001, 5.0, 2.0, HeronAnchor::kQueryPoint,
-    /*strict_outward_test=*/true, /*uses_color=*/false, kMsdm2Conventions};
+    "MSDM2", CurvatureVariant::kGeneric, DegenerateEdges::kVoidTensor, 0.002, 0.001, 5.0, 2.0,
+    HeronAnchor::kQueryPoint, /*strict_outward_test=*/true, /*uses_color=*/false,
+    kMsdm2Conventions};
 
 /// Pools one direction's per-vertex feature sums (over `scales` scales) into `result`.
 using DirectionPooling = std::function<void(const std::vector<FeatureVector>& sums, int scales,

@@ -17,6 +17,14 @@ namespace qm3d::mesh {
 namespace {
 
 std::filesystem::path cmdm_dir() { return test::reference_dir() / "cmdm"; }
+std::filesystem::path quantised_dir() { return test::reference_dir() / "quantised"; }
+
+// A reference mesh by file name: the quantised copies of blob5 are in quantised/, every other
+// mesh (blob5_ref.off included) is in cmdm/.
+std::filesystem::path mesh_path(const std::string& name) {
+  const auto quantised = quantised_dir() / name;
+  return std::filesystem::exists(quantised) ? quantised : cmdm_dir() / name;
+}
 
 struct ReferenceRow {
   std::string ref, dist;
@@ -24,8 +32,8 @@ struct ReferenceRow {
   FeatureVector f_d2r, f_r2d;
 };
 
-std::vector<ReferenceRow> reference_rows() {
-  std::ifstream in(cmdm_dir() / "cmdm_reference.tsv");
+std::vector<ReferenceRow> reference_rows(const std::filesystem::path& table) {
+  std::ifstream in(table);
   std::string line;
   std::getline(in, line);  // header
   std::vector<ReferenceRow> rows;
@@ -46,8 +54,8 @@ const MeshMetricResult& result_for(const std::string& ref, const std::string& di
   const std::string key = ref + "|" + dist;
   auto it = cache.find(key);
   if (it == cache.end()) {
-    const auto r = read_mesh(cmdm_dir() / ref).mesh;
-    const auto d = read_mesh(cmdm_dir() / dist).mesh;
+    const auto r = read_mesh(mesh_path(ref)).mesh;
+    const auto d = read_mesh(mesh_path(dist)).mesh;
     it = cache.emplace(key, compute_cmdm(r, d)).first;
   }
   return it->second;
@@ -68,9 +76,9 @@ void expect_direction(const DirectionResult& d, double score, double bb,
   for (std::size_t k = 0; k < kNumFeatures; ++k) EXPECT_NEAR(d.features[k], f[k], 1e-6) << "f" << k + 1;
 }
 
-TEST(Cmdm, MatchesEveryReferenceRow) {
-  const auto rows = reference_rows();
-  ASSERT_EQ(rows.size(), 8u);
+void expect_rows(const std::filesystem::path& table, std::size_t count) {
+  const auto rows = reference_rows(table);
+  ASSERT_EQ(rows.size(), count);
   for (const auto& row : rows) {
     SCOPED_TRACE(row.ref + " vs " + row.dist);
     const MeshMetricResult& r = result_for(row.ref, row.dist);
@@ -81,6 +89,14 @@ TEST(Cmdm, MatchesEveryReferenceRow) {
   }
 }
 
+TEST(Cmdm, MatchesEveryReferenceRow) { expect_rows(cmdm_dir() / "cmdm_reference.tsv", 8); }
+
+// blob5 quantised to 6, 8 and 10 bits: zero-area faces and coincident vertices (6 bits), where
+// CMDM's curvature uses replacement normals (SPEC-CMDM 1.5 step 4).
+TEST(Cmdm, MatchesEveryQuantisedReferenceRow) {
+  expect_rows(quantised_dir() / "cmdm_quantised_reference.tsv", 4);
+}
+
 std::vector<double> read_column(const std::filesystem::path& p) {
   std::ifstream in(p);
   std::vector<double> v;
@@ -89,10 +105,12 @@ std::vector<double> read_column(const std::filesystem::path& p) {
   return v;
 }
 
-void expect_per_vertex(const std::string& ref, const std::string& dist, const std::string& stem) {
+// LD per vertex in both directions against `stem`_LD_dist.txt / _LD_ref.txt in `dir`/per_vertex.
+void expect_per_vertex(const std::string& ref, const std::string& dist,
+                       const std::filesystem::path& dir, const std::string& stem) {
   const MeshMetricResult& r = result_for(ref, dist);
-  const auto ld_dist = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_dist.txt"));
-  const auto ld_ref = read_column(cmdm_dir() / "per_vertex" / (stem + "_LD_ref.txt"));
+  const auto ld_dist = read_column(dir / "per_vertex" / (stem + "_LD_dist.txt"));
+  const auto ld_ref = read_column(dir / "per_vertex" / (stem + "_LD_ref.txt"));
   ASSERT_EQ(r.dist_to_ref->local_distortion.size(), ld_dist.size());
   ASSERT_EQ(r.ref_to_dist->local_distortion.size(), ld_ref.size());
   double worst = 0;
@@ -106,11 +124,21 @@ void expect_per_vertex(const std::string& ref, const std::string& dist, const st
 }
 
 TEST(Cmdm, PerVertexMatchesMonkey) {
-  expect_per_vertex("monkey2.obj", "monkey_simplified.obj", "LD_monkey_simplified_vs_monkey2");
+  expect_per_vertex("monkey2.obj", "monkey_simplified.obj", cmdm_dir(),
+                    "LD_monkey_simplified_vs_monkey2");
 }
 
 TEST(Cmdm, PerVertexMatchesBlob4BothNoise) {
-  expect_per_vertex("blob4_ref.off", "blob4_bothnoise.off", "LD_blob4_bothnoise_vs_blob4_ref");
+  expect_per_vertex("blob4_ref.off", "blob4_bothnoise.off", cmdm_dir(),
+                    "LD_blob4_bothnoise_vs_blob4_ref");
+}
+
+TEST(Cmdm, PerVertexMatchesQuantised) {
+  for (const std::string bits : {"6", "8"}) {
+    SCOPED_TRACE(bits + " bits");
+    expect_per_vertex("blob5_ref.off", "blob5_pquant" + bits + ".off", quantised_dir(),
+                      "LD_blob5_pquant" + bits + "_vs_blob5_ref");
+  }
 }
 
 TEST(Cmdm, ObjOffAndPlyCopiesGiveTheSameScore) {
