@@ -20,9 +20,11 @@
 namespace qm3d::pointcloud::detail {
 namespace {
 
-/// k-d tree leaves (about 12 points each, queried as one batch) per dynamic-schedule chunk: large
-/// enough to keep a thread's queries spatially coherent, small enough to balance clouds of
-/// uneven density. Batches of 2 or 4 leaves measured the same on the 1M and 2M spheres.
+/// Points per query batch (consecutive k-d tree leaves searched with one candidate gather):
+/// batches of up to 16 points were about 3% faster than single leaves on the 1M sphere.
+constexpr std::uint32_t kBatchPoints = 16;
+/// Query batches per dynamic-schedule chunk: large enough to keep a thread's queries spatially
+/// coherent, small enough to balance clouds of uneven density.
 constexpr std::int64_t kLeavesPerChunk = 16;
 /// Relative slack on the kNN reach of a leaf, covering the rounding of its computation.
 constexpr double kReachSlack = 1.0 + 1e-9;
@@ -250,10 +252,26 @@ void stage1_leaf(const std::array<std::uint32_t, 2>& leaf, const Clouds& c,
   }
 }
 
-// Calls visit(leaf, scratch) for every leaf of `tree`, in parallel, with one Scratch per thread.
+/// Consecutive leaves of `tree` merged into query batches of at most kBatchPoints points (a
+/// leaf holds at most 10, often 5 or 6): one candidate gather then serves about a dozen
+/// neighbouring queries. Tree-index ranges [first, last), in tree order.
+std::vector<std::array<std::uint32_t, 2>> query_batches(const KdTree& tree) {
+  std::vector<std::array<std::uint32_t, 2>> batches;
+  for (const auto& leaf : tree.leaves()) {
+    if (!batches.empty() && leaf[1] - batches.back()[0] <= kBatchPoints) {
+      batches.back()[1] = leaf[1];
+    } else {
+      batches.push_back(leaf);
+    }
+  }
+  return batches;
+}
+
+// Calls visit(batch, scratch) for every query batch of `tree`, in parallel, with one Scratch
+// per thread.
 template <typename Scratch, typename Visit>
 void for_each_leaf(const KdTree& tree, int threads, Visit&& visit) {
-  const auto& leaves = tree.leaves();
+  const auto leaves = query_batches(tree);
   const auto n = static_cast<std::int64_t>(leaves.size());
 #pragma omp parallel num_threads(thread_count(threads))
   {
