@@ -97,20 +97,12 @@ TEST(Cmdm, MatchesEveryQuantisedReferenceRow) {
   expect_rows(quantised_dir() / "cmdm_quantised_reference.tsv", 4);
 }
 
-std::vector<double> read_column(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::vector<double> v;
-  double x;
-  while (in >> x) v.push_back(x);
-  return v;
-}
-
 // LD per vertex in both directions against `stem`_LD_dist.txt / _LD_ref.txt in `dir`/per_vertex.
 void expect_per_vertex(const std::string& ref, const std::string& dist,
                        const std::filesystem::path& dir, const std::string& stem) {
   const MeshMetricResult& r = result_for(ref, dist);
-  const auto ld_dist = read_column(dir / "per_vertex" / (stem + "_LD_dist.txt"));
-  const auto ld_ref = read_column(dir / "per_vertex" / (stem + "_LD_ref.txt"));
+  const auto ld_dist = test::read_column(dir / "per_vertex" / (stem + "_LD_dist.txt"));
+  const auto ld_ref = test::read_column(dir / "per_vertex" / (stem + "_LD_ref.txt"));
   ASSERT_EQ(r.dist_to_ref->local_distortion.size(), ld_dist.size());
   ASSERT_EQ(r.ref_to_dist->local_distortion.size(), ld_ref.size());
   double worst = 0;

@@ -24,8 +24,10 @@ ColoredMesh quantised_table_mesh(const std::string& name) {
   return read_mesh(std::filesystem::exists(quantised) ? quantised : cmdm_dir() / name).mesh;
 }
 
-TEST(Msdm2, MatchesEveryReferenceRow) {
-  std::ifstream in(test::reference_dir() / "msdm2" / "msdm2_reference.tsv");
+// Calls check(ref, dist, expected) for every row of an MSDM2 table; returns the row count.
+template <typename Check>
+int for_each_row(const std::filesystem::path& table, Check&& check) {
+  std::ifstream in(table);
   std::string line;
   std::getline(in, line);  // header
   int rows = 0;
@@ -35,19 +37,27 @@ TEST(Msdm2, MatchesEveryReferenceRow) {
     double expected = 0;
     s >> ref >> dist >> expected;
     SCOPED_TRACE(ref + " vs " + dist);
-    const auto r = read_mesh(cmdm_dir() / ref).mesh;
-    const auto d = read_mesh(cmdm_dir() / dist).mesh;
-    const MeshMetricResult m = compute_msdm2(r, d);
-    // The reference printed 6 significant digits. On blob4_geonoise / bothnoise ~13% of the
-    // distorted vertices project onto an edge of the reference, equidistant from two faces, and
-    // MSDM2 measures its Heron distances from the off-surface vertex: these rows only match when
-    // the AABB tree reports the same face as MEPP2's (its hints built before the tree, in face
-    // order); other hints move the score by 6e-5.
-    EXPECT_NEAR(m.score, expected, 1e-5 * expected);
-    ASSERT_TRUE(m.dist_to_ref);
-    EXPECT_FALSE(m.ref_to_dist);
+    check(ref, dist, expected);
     ++rows;
   }
+  return rows;
+}
+
+TEST(Msdm2, MatchesEveryReferenceRow) {
+  const int rows = for_each_row(
+      test::reference_dir() / "msdm2" / "msdm2_reference.tsv",
+      [](const std::string& ref, const std::string& dist, double expected) {
+        const MeshMetricResult m =
+            compute_msdm2(read_mesh(cmdm_dir() / ref).mesh, read_mesh(cmdm_dir() / dist).mesh);
+        // The reference printed 6 significant digits. On blob4_geonoise / bothnoise ~13% of the
+        // distorted vertices project onto an edge of the reference, equidistant from two faces,
+        // and MSDM2 measures its Heron distances from the off-surface vertex: these rows only
+        // match when the AABB tree reports the same face as MEPP2's (its hints built before the
+        // tree, in face order); other hints move the score by 6e-5.
+        EXPECT_NEAR(m.score, expected, 1e-5 * expected);
+        ASSERT_TRUE(m.dist_to_ref);
+        EXPECT_FALSE(m.ref_to_dist);
+      });
   EXPECT_EQ(rows, 4);
 }
 
@@ -55,29 +65,14 @@ TEST(Msdm2, MatchesEveryReferenceRow) {
 // and 1124 zero-area faces, where MEPP2's generic curvature gives 0 (SPEC-CMDM
 // §MSDM2-degenerate). The reference printed 17 digits; qm3d agrees to ~1e-12 relative.
 TEST(Msdm2, MatchesEveryQuantisedReferenceRow) {
-  std::ifstream in(quantised_dir() / "msdm2_quantised_reference.tsv");
-  std::string line;
-  std::getline(in, line);  // header
-  int rows = 0;
-  while (std::getline(in, line)) {
-    std::istringstream s(line);
-    std::string ref, dist;
-    double expected = 0;
-    s >> ref >> dist >> expected;
-    SCOPED_TRACE(ref + " vs " + dist);
-    const MeshMetricResult m = compute_msdm2(quantised_table_mesh(ref), quantised_table_mesh(dist));
-    EXPECT_NEAR(m.score, expected, 1e-6 * expected);
-    ++rows;
-  }
+  const int rows = for_each_row(
+      quantised_dir() / "msdm2_quantised_reference.tsv",
+      [](const std::string& ref, const std::string& dist, double expected) {
+        const MeshMetricResult m =
+            compute_msdm2(quantised_table_mesh(ref), quantised_table_mesh(dist));
+        EXPECT_NEAR(m.score, expected, 1e-6 * expected);
+      });
   EXPECT_EQ(rows, 4);
-}
-
-std::vector<double> read_column(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::vector<double> v;
-  double x;
-  while (in >> x) v.push_back(x);
-  return v;
 }
 
 // Per-vertex MSDM2 (dist->ref) of blob5 quantised to `bits`, against MEPP2's values. The worst
@@ -91,7 +86,7 @@ void expect_local_msdm2(int bits) {
   const MeshMetricResult m =
       compute_msdm2(quantised_table_mesh("blob5_ref.off"), quantised_table_mesh(dist + ".off"));
   const auto expected =
-      read_column(quantised_dir() / "per_vertex" / ("MSDM2_local_" + dist + "_vs_blob5_ref.txt"));
+      test::read_column(quantised_dir() / "per_vertex" / ("MSDM2_local_" + dist + "_vs_blob5_ref.txt"));
   const std::vector<double>& local = m.dist_to_ref->local_distortion;
   ASSERT_EQ(local.size(), expected.size());
   double worst = 0;
