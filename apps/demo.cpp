@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 
 #ifndef QM3D_DEMO_DIR
 #define QM3D_DEMO_DIR "data"
@@ -43,7 +44,14 @@ std::string fixed(double v) {
 
 }  // namespace
 
-std::filesystem::path default_demo_dir() { return QM3D_DEMO_DIR; }
+std::filesystem::path default_demo_dir() {
+  // An installed tool has its stimuli in PREFIX/share/qm3d/data; a build tree uses the sources'.
+  const std::filesystem::path share = installed_share_dir();
+  if (!share.empty() && std::filesystem::is_directory(share / "data" / "meshes")) {
+    return share / "data";
+  }
+  return QM3D_DEMO_DIR;
+}
 
 int run_demo(const std::filesystem::path& dir, const mesh::CmdmOptions& cmdm,
              const pointcloud::PcqmOptions& pcqm, std::ostream& out) {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole qm3d test suite with ctest (building first if needed).
 #
-#   scripts/test.sh              # normal Release build in build/
+#   scripts/test.sh              # normal Release build in build/, then the installed package
+#                                # used by tests/downstream (scripts/test_downstream.sh)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -27,3 +28,8 @@ fi
 cmake --build "$BUILD_DIR" -j "$JOBS"
 cd "$BUILD_DIR"
 ctest --output-on-failure -j "$JOBS" "${CTEST_ARGS[@]}"
+# The installed package, used by another project (tests/downstream); not under the sanitizers
+# (the downstream program would need their runtime too).
+if [ ${#EXTRA[@]} -eq 0 ]; then
+  bash "$ROOT/scripts/test_downstream.sh" "$BUILD_DIR"
+fi

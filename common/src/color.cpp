@@ -209,6 +209,12 @@ std::filesystem::path resolve_data_dir(const std::filesystem::path& explicit_dir
   if (const char* env = std::getenv("QM3D_DATA_DIR"); env != nullptr && *env != '\0') {
     return std::filesystem::path(env);
   }
+  if (const auto share = installed_share_dir(); !share.empty()) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(share / "lab2000hl" / "L_data.txt", ec)) {
+      return share / "lab2000hl";
+    }
+  }
   return std::filesystem::path(QM3D_DEFAULT_DATA_DIR);
 }
 

@@ -88,4 +88,12 @@ void write_file_atomically(const std::filesystem::path& path,
   }
 }
 
+std::filesystem::path installed_share_dir() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec || exe.empty()) return {};
+  const std::filesystem::path share = exe.parent_path().parent_path() / "share" / "qm3d";
+  return std::filesystem::is_directory(share, ec) ? share : std::filesystem::path();
+}
+
 }  // namespace qm3d

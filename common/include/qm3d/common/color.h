@@ -77,7 +77,8 @@ class Lab2000hlTable {
 };
 
 /// The table directory to use: `explicit_dir` if not empty, else $QM3D_DATA_DIR if set, else
-/// the directory fixed at configure time (QM3D_DEFAULT_DATA_DIR).
+/// PREFIX/share/qm3d/lab2000hl when the running program is an installed PREFIX/bin/<program>
+/// and the tables are there, else the directory fixed at configure time (QM3D_DEFAULT_DATA_DIR).
 std::filesystem::path resolve_data_dir(const std::filesystem::path& explicit_dir = {});
 
 /// Converts every colour of a set to LAB2000HL.

@@ -23,4 +23,8 @@ std::string lower_extension(const std::filesystem::path& path);
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write);
 
+/// PREFIX/share/qm3d when the running program is PREFIX/bin/<program> of an installed qm3d
+/// (that directory exists); empty otherwise (a build tree, or a program installed elsewhere).
+std::filesystem::path installed_share_dir();
+
 }  // namespace qm3d
