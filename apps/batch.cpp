@@ -208,10 +208,16 @@ int run_batch(const BatchOptions& o) {
   const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(todo.size())));
   const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
   std::atomic<std::size_t> next{0};
+  // Each job gets its share of the threads, passed to every metric explicitly (a metric's own
+  // concurrent tasks then share that count too).
+  BatchOptions per_job = o;
+  const int job_threads = std::max(1, total_threads / jobs);
+  per_job.metrics.cmdm.threads = per_job.metrics.msdm2.threads = job_threads;
+  per_job.metrics.pcqm.threads = job_threads;
   auto worker = [&] {
-    omp_set_num_threads(std::max(1, total_threads / jobs));
+    omp_set_num_threads(job_threads);
     for (std::size_t i = next++; i < todo.size(); i = next++) {
-      const auto [row, failed] = score_pair(todo[i].first, todo[i].second, o);
+      const auto [row, failed] = score_pair(todo[i].first, todo[i].second, per_job);
       writer.write_line(row);
       progress.done_one(failed);
     }

@@ -115,15 +115,20 @@ void write_mesh_map(const std::filesystem::path& map, const mesh::MeshMetricResu
                                     : r.ref_to_dist->local_distortion);
 }
 
+// How the two inputs of a pair are read (or sampled): concurrently, unless the metric was given
+// one thread (--threads 1 keeps one core busy).
+std::launch input_launch(int threads) {
+  return threads == 1 ? std::launch::deferred : std::launch::async;
+}
+
 // Reads both meshes, runs `compute`, and reports it.
 template <typename Compute>
 MetricReport run_mesh_metric(const char* metric, const std::filesystem::path& reference,
                              const std::filesystem::path& distorted, nlohmann::json options,
-                             bool require_colors, const std::filesystem::path& map,
+                             bool require_colors, int threads, const std::filesystem::path& map,
                              const Compute& compute) {
   const auto start = std::chrono::steady_clock::now();
-  // The two files are read concurrently.
-  auto ref_task = std::async(std::launch::async,
+  auto ref_task = std::async(input_launch(threads),
                              [&] { return mesh::read_mesh(reference, {require_colors}); });
   const mesh::MeshFile dist = mesh::read_mesh(distorted, {require_colors});
   const mesh::MeshFile ref = ref_task.get();
@@ -143,7 +148,8 @@ MetricReport run_mesh_metric(const char* metric, const std::filesystem::path& re
 
 MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
                       const mesh::CmdmOptions& options, const std::filesystem::path& map) {
-  return run_mesh_metric("cmdm", reference, distorted, cmdm_options_json(options), true, map,
+  return run_mesh_metric("cmdm", reference, distorted, cmdm_options_json(options), true,
+                         options.threads, map,
                          [&](const ColoredMesh& r, const ColoredMesh& d, bool per_vertex) {
                            mesh::CmdmOptions o = options;
                            o.per_vertex = per_vertex;
@@ -156,7 +162,7 @@ MetricReport run_msdm2(const std::filesystem::path& reference,
                        const std::filesystem::path& map) {
   const nlohmann::json json = {{"direction", direction_name(options.direction)},
                                {"scales", options.scales}};
-  return run_mesh_metric("msdm2", reference, distorted, json, false, map,
+  return run_mesh_metric("msdm2", reference, distorted, json, false, options.threads, map,
                          [&](const ColoredMesh& r, const ColoredMesh& d, bool per_vertex) {
                            mesh::Msdm2Options o = options;
                            o.per_vertex = per_vertex;
@@ -197,7 +203,7 @@ nlohmann::json sampling_json(const mesh::SamplingOptions& o) {
 MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
                       const pointcloud::PcqmOptions& options, const std::filesystem::path& map) {
   const auto start = std::chrono::steady_clock::now();
-  auto ref_task = std::async(std::launch::async, [&] { return load_cloud(reference); });
+  auto ref_task = std::async(input_launch(options.threads), [&] { return load_cloud(reference); });
   const ColoredCloud dist = load_cloud(distorted);
   const ColoredCloud ref = ref_task.get();
   MetricReport report = pcqm_report("pcqm", reference, distorted, ref, dist,
@@ -229,7 +235,7 @@ MetricReport run_pcqm_sampled(const std::filesystem::path& reference,
       throw NumericError(path.string() + ": " + e.what());
     }
   };
-  auto ref_task = std::async(std::launch::async, [&] { return sample(reference); });
+  auto ref_task = std::async(input_launch(options.pcqm.threads), [&] { return sample(reference); });
   const ColoredCloud dist = sample(distorted);
   const ColoredCloud ref = ref_task.get();
   nlohmann::json json = pcqm_options_json(options.pcqm);

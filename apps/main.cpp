@@ -274,6 +274,8 @@ int run(int argc, char** argv) {
   if (!model_file.empty() && *pcqm_cmd) pcqm.model = read_model_for(model_file, "pcqm");
   pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
   cmdm.data_dir = pcqm.data_dir = global.data_dir;
+  cmdm.threads = pcqm.threads = global.threads;
+  msdm2.threads = global.threads;
   msdm2.direction = parse_direction(msdm2_direction);
   // One pair: its stages on stderr (batch shows pairs done instead).
   const bool single_pair = *cmdm_cmd || *msdm2_cmd || *pcqm_cmd || *compare_cmd;

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as a Markdown table.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|all]      (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|threads|all]      (default: all)
+#
+# `threads` runs a 164k-vertex CMDM pair and a 200k-point PCQM pair with --threads 1 and checks
+# that they keep one core busy: CPU time (user + system) at most 1.1 x wall.
 #
 # Inputs are generated once (with ../shared/tools/*.py, which need python3-numpy) into
 # $QM3D_BENCH_DIR (default /tmp/qm3d-bench). Each case runs the built tool end to end (reading
@@ -35,25 +38,27 @@ ref_score() {  # metric reference distorted -> reference score from scale_refere
 run_case() {  # label target metric ref dist [args...]
   local label=$1 target=$2 metric=$3 ref=$4 dist=$5; shift 5
   local out
-  out=$( { /usr/bin/time -f "TIME %e %M" "$QM3D" --threads "$THREADS" --quiet "$metric" \
+  out=$( { /usr/bin/time -f "TIME %e %M %U %S" "$QM3D" --threads "$THREADS" --quiet "$metric" \
            "$DATA/$ref" "$DATA/$dist" --csv "$@" ; } 2>&1 )
-  local wall rss score expected
+  local wall rss cpu score expected
   wall=$(echo "$out" | awk '/^TIME/ {print $2}')
   rss=$(echo "$out" | awk '/^TIME/ {printf "%.0f", $3/1024}')
+  cpu=$(echo "$out" | awk '/^TIME/ {printf "%.2f", $4 + $5}')
   score=$(echo "$out" | awk -F, 'NR==2 {print $4}')
   expected=$(ref_score "$metric" "$ref" "$dist")
   local rel="n/a"
   if [ -n "$expected" ]; then
     rel=$($PY -c "print('%.1e' % (abs($score-$expected)/abs($expected)))")
   fi
-  printf '| %s | %s s | %s MB | %s | %s | %s | %s |\n' "$label" "$wall" "$rss" "$score" \
-    "${expected:-?}" "$rel" "$target"
+  printf '| %s | %s s | %s s | %s MB | %s | %s | %s | %s |\n' "$label" "$wall" "$cpu" "$rss" \
+    "$score" "${expected:-?}" "$rel" "$target"
+  LAST_WALL=$wall LAST_CPU=$cpu
 }
 
 echo "qm3d $("$QM3D" --version | awk '{print $2}'), $THREADS threads, $(nproc) cores, $(uname -m)"
 echo
-echo "| case | wall | peak RSS | score | reference score | rel. diff | target |"
-echo "|---|---|---|---|---|---|---|"
+echo "| case | wall | CPU | peak RSS | score | reference score | rel. diff | target |"
+echo "|---|---|---|---|---|---|---|---|"
 if [ "$WHICH" = all ] || [ "$WHICH" = cmdm ]; then
   gen_mesh 7; gen_mesh 8
   run_case "CMDM blob7 (164k vertices)" "<= 2 s" cmdm blob7_ref.off blob7_bothnoise.off
@@ -63,4 +68,18 @@ if [ "$WHICH" = all ] || [ "$WHICH" = pcqm ]; then
   gen_cloud 1000000 1000k; gen_cloud 2000000 2000k
   run_case "PCQM sphere 1M points" "<= 4 s, <= 400 MB" pcqm sphere_1000k_ref_bin.ply sphere_1000k_cnoise10_bin.ply
   run_case "PCQM sphere 2M points" "<= 10 s" pcqm sphere_2000k_ref_bin.ply sphere_2000k_cnoise10_bin.ply
+fi
+if [ "$WHICH" = all ] || [ "$WHICH" = threads ]; then
+  gen_mesh 7; gen_cloud 200000 200k
+  status=0
+  for c in "cmdm|CMDM blob7 (164k vertices), --threads 1|blob7_ref.off|blob7_bothnoise.off" \
+           "pcqm|PCQM sphere 200k points, --threads 1|sphere_200k_ref_bin.ply|sphere_200k_cnoise10_bin.ply"; do
+    IFS='|' read -r metric label ref dist <<<"$c"
+    THREADS=1 run_case "$label" "CPU <= 1.1 x wall" "$metric" "$ref" "$dist"
+    if ! $PY -c "import sys; sys.exit(0 if $LAST_CPU <= 1.1 * $LAST_WALL else 1)"; then
+      echo "FAIL: $label used $LAST_CPU s of CPU in $LAST_WALL s" >&2
+      status=1
+    fi
+  done
+  exit $status
 fi

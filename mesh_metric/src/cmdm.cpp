@@ -23,7 +23,7 @@ MeshMetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& d
       r.local_distortion[v] = options.model.apply(sums[v]) / scales;
     }
   };
-  const detail::MultiscaleRun run{options.direction, options.scales, table.get(),
+  const detail::MultiscaleRun run{options.direction, options.scales, options.threads, table.get(),
                                   options.progress};
   return detail::run_multiscale(reference, distorted, detail::kCmdmDefinition, run, pool);
 }

@@ -89,10 +89,10 @@ bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v) {
 }
 
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
-                                        CurvatureVariant variant) {
+                                        CurvatureVariant variant, int threads) {
   const auto n = static_cast<std::int64_t>(mesh.positions.size());
   std::vector<double> curvature(mesh.positions.size(), 0.0);
-#pragma omp parallel
+#pragma omp parallel num_threads(threads)
   {
     WalkScratch scratch;
 #pragma omp for schedule(dynamic, 512)

@@ -20,9 +20,9 @@ enum class CurvatureVariant {
 /// maxdim * (|k1| + |k2|) / 2 per vertex, where k1, k2 are the two principal curvatures of
 /// largest magnitude of the tensor accumulated within `radius` (SPEC-CMDM 1.5 step 7); 0 at a
 /// vertex whose tensor reaches an edge marked kVoidsTensor (the mesh's DegenerateEdges rule).
-/// Parallel over vertices; the result does not depend on the thread count.
+/// Parallel over vertices with `threads` OpenMP threads; the result does not depend on them.
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
-                                        CurvatureVariant variant);
+                                        CurvatureVariant variant, int threads);
 
 /// MEPP2's sphere_clip_vector (ClippingAndIntersection.hpp): clips `v`, starting at `p`, to the
 /// sphere (o, r). Returns true when the segment crosses the sphere ("isect").

@@ -89,11 +89,11 @@ double edge_beta(const DihedralInput& m, DegenerateEdges rule, std::uint32_t v, 
 
 }  // namespace
 
-std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule) {
+std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule, int threads) {
   const RingFaces& r = m.rings;
   std::vector<double> beta(r.source.size(), kNoContribution);
   const auto n = static_cast<std::int64_t>(r.offsets.size()) - 1;
-#pragma omp parallel for schedule(dynamic, 1024)
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
   for (std::int64_t vi = 0; vi < n; ++vi) {
     const auto v = static_cast<std::uint32_t>(vi);
     for (std::uint32_t k = r.offsets[v]; k < r.offsets[v + 1]; ++k) {

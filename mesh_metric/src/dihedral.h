@@ -56,7 +56,7 @@ struct DihedralInput {
 };
 
 /// beta of each incoming half-edge under `rule`; kNoContribution or kVoidsTensor where the edge
-/// has no angle.
-std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule);
+/// has no angle. Parallel over vertices with `threads` OpenMP threads.
+std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule, int threads);
 
 }  // namespace qm3d::mesh::detail

@@ -132,7 +132,7 @@ void valid_triangles(const ColoredMesh& mesh, const std::string& name, HalfedgeM
 }  // namespace
 
 HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name,
-                                 DegenerateEdges degenerate_edges) {
+                                 DegenerateEdges degenerate_edges, int threads) {
   HalfedgeMesh out;
   out.positions = view_of(mesh.positions);
   out.input_vertex.resize(mesh.positions.size());
@@ -159,7 +159,8 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
     normals[f] = face_normal(out.positions[t[0]], out.positions[t[1]], out.positions[t[2]]);
   }
   out.rings.dihedral =
-      dihedral_angles({out.positions.ptr, out.triangles.ptr, normals, rings}, degenerate_edges);
+      dihedral_angles({out.positions.ptr, out.triangles.ptr, normals, rings}, degenerate_edges,
+                      threads);
   out.rings.offsets = std::move(rings.offsets);
   out.rings.source = std::move(rings.source);
   return out;

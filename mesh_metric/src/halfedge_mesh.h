@@ -61,9 +61,9 @@ struct HalfedgeMesh {
 /// Builds the connectivity and the edges' dihedral angles under `degenerate_edges`. Faces with a
 /// repeated vertex are dropped with a warning; non-manifold configurations are repaired by
 /// duplicating vertices (CGAL's orient_polygon_soup), with a warning. `name` names the mesh in
-/// messages.
+/// messages; `threads` OpenMP threads compute the angles.
 HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name,
-                                 DegenerateEdges degenerate_edges);
+                                 DegenerateEdges degenerate_edges, int threads);
 
 /// Unit normal of face (a, b, c) as MEPP2 computes it: calculate_face_normal.hpp takes the
 /// face's first vertex a as p0 and returns CGAL::unit_normal(b, c, a) = (c - b) x (a - b),

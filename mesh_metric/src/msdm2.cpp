@@ -24,7 +24,8 @@ MeshMetricResult compute_msdm2(const ColoredMesh& reference, const ColoredMesh& 
     r.score = minkowski_pool(local, kMinkowskiExponent);
     if (options.per_vertex) r.local_distortion = std::move(local);
   };
-  const detail::MultiscaleRun run{options.direction, options.scales, nullptr, options.progress};
+  const detail::MultiscaleRun run{options.direction, options.scales, options.threads, nullptr,
+                                  options.progress};
   return detail::run_multiscale(reference, distorted, detail::kMsdm2Definition, run, pool);
 }
 

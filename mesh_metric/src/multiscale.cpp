@@ -1,5 +1,7 @@
 #include "multiscale.h"
 
+#include <omp.h>
+
 #include <cmath>
 #include <deque>
 #include <future>
@@ -46,9 +48,9 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
 }
 
 PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
-                     const MultiscaleDefinition& def) {
+                     const MultiscaleDefinition& def, int threads) {
   PreparedMesh p;
-  p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges);
+  p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges, threads);
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.bbox_max_side = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
@@ -81,7 +83,8 @@ std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
 // directions use the same radii (same bounding-box size, e.g. colour-only distortions).
 class CurvatureCache {
  public:
-  CurvatureCache(CurvatureVariant variant, bool reuse) : variant_(variant), reuse_(reuse) {}
+  CurvatureCache(CurvatureVariant variant, bool reuse, int threads)
+      : variant_(variant), reuse_(reuse), threads_(threads) {}
 
   const std::vector<double>& get(const HalfedgeMesh& mesh, double radius, double maxdim) {
     for (const Entry& e : entries_) {
@@ -90,7 +93,7 @@ class CurvatureCache {
     // Without reuse only the current scale's pair is kept (popping the front of a deque leaves
     // references to the other entries valid).
     if (!reuse_ && entries_.size() >= 2) entries_.pop_front();
-    entries_.push_back({&mesh, radius, maxdim, processed_curvature(mesh, radius, maxdim, variant_)});
+    entries_.push_back({&mesh, radius, maxdim, processed_curvature(mesh, radius, maxdim, variant_, threads_)});
     return entries_.back().values;
   }
 
@@ -102,14 +105,16 @@ class CurvatureCache {
   };
   CurvatureVariant variant_;
   bool reuse_;
+  int threads_;
   std::deque<Entry> entries_;
 };
 
 // Adds each vertex's features at one scale to the running sums.
 void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
-                      const FeatureConventions& conventions, std::vector<FeatureVector>& sums) {
+                      const FeatureConventions& conventions, std::vector<FeatureVector>& sums,
+                      int threads) {
   const auto n = static_cast<std::int64_t>(sums.size());
-#pragma omp parallel
+#pragma omp parallel num_threads(threads)
   {
     WalkScratch scratch;
     NeighbourhoodSamples samples;
@@ -126,8 +131,9 @@ void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
 std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const PreparedMesh& second,
                                           const MultiscaleDefinition& def, int scales,
-                                          CurvatureCache& curvatures, SurfaceMatches matching,
-                                          const std::string& label, ProgressSteps& progress) {
+                                          int threads, CurvatureCache& curvatures,
+                                          SurfaceMatches matching, const std::string& label,
+                                          ProgressSteps& progress) {
   const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
   if (def.uses_color) lab_match = interpolate_colors(matches, second.mesh, second.lab);
@@ -144,19 +150,19 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const Prepa
                                def.uses_color ? &lab_match : nullptr};
     const double h = rc * def.neighbourhood_factor * maxdim;
     accumulate_scale(fields, {h, h / def.sigma_divisor, def.strict_outward_test}, def.conventions,
-                     sums);
+                     sums, threads);
     rc += def.radius_step;
   }
   return sums;
 }
 
 SurfaceMatches match(const PreparedMesh& first, const PreparedMesh& second,
-                     const MultiscaleDefinition& def) {
-  return match_to_surface(first.mesh.positions, second.mesh, def.anchor);
+                     const MultiscaleDefinition& def, int threads) {
+  return match_to_surface(first.mesh.positions, second.mesh, def.anchor, threads);
 }
 
 DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& second,
-                              const MultiscaleDefinition& def, int scales,
+                              const MultiscaleDefinition& def, int scales, int threads,
                               CurvatureCache& curvatures, const DirectionPooling& pool,
                               std::optional<SurfaceMatches> matching, const std::string& label,
                               ProgressSteps& progress) {
@@ -164,10 +170,10 @@ DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& sec
   result.bbox_max_side = first.bbox_max_side;
   if (!matching) {
     progress.begin(label + ": closest points");
-    matching = match(first, second, def);
+    matching = match(first, second, def, threads);
   }
-  auto sums = direction_sums(first, second, def, scales, curvatures, std::move(*matching), label,
-                             progress);
+  auto sums = direction_sums(first, second, def, scales, threads, curvatures, std::move(*matching),
+                             label, progress);
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
   if (result.local_distortion.size() > first.input_vertices) {
@@ -189,33 +195,41 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
   // Steps of about equal cost: preparing, then per direction its matching and each scale.
   ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + run.scales));
   progress.begin("connectivity");
+  // Every parallel part gets an explicit thread count: OpenMP regions started from a std::async
+  // task would otherwise use the default, not the caller's setting. Two concurrent tasks share
+  // the threads, and with one thread nothing runs concurrently.
+  const int threads = run.threads > 0 ? run.threads : omp_get_max_threads();
+  const bool concurrent = threads >= 2;
+  const int per_task = concurrent ? threads / 2 : 1;
   // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
-  auto ref_task = std::async(std::launch::async, [&] {
-    return prepare(reference, "reference mesh", run, def);
-  });
-  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def);
+  const auto prepare_ref = [&] { return prepare(reference, "reference mesh", run, def, per_task); };
+  std::future<PreparedMesh> ref_task =
+      std::async(concurrent ? std::launch::async : std::launch::deferred, prepare_ref);
+  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def, per_task);
   const PreparedMesh ref = ref_task.get();
   MeshMetricResult result;
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
-  CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side);
+  CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side,
+                            threads);
   // Closest-point matching builds one AABB tree per direction, sequentially inside CGAL. When
   // both directions are needed and the trees are small, both are matched concurrently up front;
   // large meshes are matched one direction at a time to keep the memory peak low.
   std::optional<SurfaceMatches> d2r_matches, r2d_matches;
-  if (both && ref.mesh.triangles.size() + dist.mesh.triangles.size() <= kConcurrentMatchFaces) {
+  if (concurrent && both &&
+      ref.mesh.triangles.size() + dist.mesh.triangles.size() <= kConcurrentMatchFaces) {
     progress.begin("closest points, both directions", 2);
-    auto r2d = std::async(std::launch::async, [&] { return match(ref, dist, def); });
-    d2r_matches = match(dist, ref, def);
+    auto r2d = std::async(std::launch::async, [&] { return match(ref, dist, def, per_task); });
+    d2r_matches = match(dist, ref, def, per_task);
     r2d_matches = r2d.get();
   }
   if (run.direction != Direction::kRefToDist) {
-    result.dist_to_ref = run_direction(dist, ref, def, run.scales, curvatures, pool,
+    result.dist_to_ref = run_direction(dist, ref, def, run.scales, threads, curvatures, pool,
                                        std::move(d2r_matches), "dist→ref", progress);
   }
   if (run.direction != Direction::kDistToRef) {
-    result.ref_to_dist = run_direction(ref, dist, def, run.scales, curvatures, pool,
+    result.ref_to_dist = run_direction(ref, dist, def, run.scales, threads, curvatures, pool,
                                        std::move(r2d_matches), "ref→dist", progress);
   }
   result.score = both ? (result.dist_to_ref->score + result.ref_to_dist->score) / 2

@@ -62,6 +62,9 @@ using DirectionPooling = std::function<void(const std::vector<FeatureVector>& su
 struct MultiscaleRun {
   Direction direction = Direction::kSymmetric;
   int scales = 3;
+  /// OpenMP threads for every parallel part, concurrent tasks included; 0 = the calling
+  /// thread's OpenMP default (omp_get_max_threads()). The result does not depend on it.
+  int threads = 0;
   const Lab2000hlTable* colors = nullptr;  ///< required when the definition uses colour
   ProgressCallback progress;               ///< optional: told each stage as it starts
 };

@@ -98,8 +98,8 @@ void add_search_hints(Tree& tree, const HalfedgeMesh& target, HeronAnchor anchor
 
 }  // namespace
 
-SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries,
-                                           const HalfedgeMesh& target, HeronAnchor anchor) {
+SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
+                                HeronAnchor anchor, int threads) {
   const FaceTriangleMap triangles{&target};
   const FacePointMap points{&target};
   Tree tree(boost::counting_iterator<std::uint32_t>(0),
@@ -121,7 +121,7 @@ SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries,
     m.areas = heron_areas(target, m.face, anchor == HeronAnchor::kProjectedPoint ? point : v);
   };
   const auto n = static_cast<std::int64_t>(queries.size());
-#pragma omp parallel for schedule(dynamic, 1024)
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
   for (std::int64_t i = 0; i < n; ++i) match_one(static_cast<std::size_t>(i));
   return out;
 }

@@ -29,9 +29,10 @@ enum class HeronAnchor {
   kQueryPoint,      ///< MSDM2: the query vertex itself (off the surface)
 };
 
-/// For each query, the closest point on `target` and its interpolation areas. Parallel.
-SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries,
-                                           const HalfedgeMesh& target, HeronAnchor anchor);
+/// For each query, the closest point on `target` and its interpolation areas. Parallel over the
+/// queries with `threads` OpenMP threads.
+SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
+                                HeronAnchor anchor, int threads);
 
 /// (a1 x1 + a2 x2 + a3 x3) / (a1 + a2 + a3), or the plain average when all areas are 0,
 /// written as MEPP2's matching_multires_update does.

@@ -153,6 +153,23 @@ TEST(Cmdm, OneAndTwoThreadsAreBitIdentical) {
   EXPECT_EQ(one.ref_to_dist->local_distortion, two.ref_to_dist->local_distortion);
 }
 
+// The threads option reaches every parallel part, the concurrent preparation and matching
+// included (one thread: nothing runs concurrently); the result never depends on it.
+TEST(Cmdm, ThreadsOptionGivesBitIdenticalResults) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_bothnoise.off").mesh;
+  CmdmOptions o;
+  o.threads = 1;
+  const MeshMetricResult one = compute_cmdm(r, d, o);
+  for (int threads : {2, 3}) {
+    o.threads = threads;
+    const MeshMetricResult many = compute_cmdm(r, d, o);
+    EXPECT_EQ(one.score, many.score) << threads;
+    EXPECT_EQ(one.ref_to_dist->features, many.ref_to_dist->features) << threads;
+    EXPECT_EQ(one.dist_to_ref->local_distortion, many.dist_to_ref->local_distortion) << threads;
+  }
+}
+
 TEST(Cmdm, DirectionOptionComputesOnlyWhatIsAsked) {
   const auto r = read_mesh(cmdm_dir() / "monkey2.obj").mesh;
   const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;

@@ -31,8 +31,8 @@ ColoredMesh fan_with_collinear_face() {
 
 std::vector<double> curvature_as_in(const MultiscaleDefinition& def, const ColoredMesh& input,
                                     double radius) {
-  const HalfedgeMesh mesh = build_halfedge_mesh(input, "fan", def.degenerate_edges);
-  return processed_curvature(mesh, radius, /*maxdim=*/1.0, def.curvature);
+  const HalfedgeMesh mesh = build_halfedge_mesh(input, "fan", def.degenerate_edges, 1);
+  return processed_curvature(mesh, radius, /*maxdim=*/1.0, def.curvature, 1);
 }
 
 TEST(Curvature, FaceNormalIsNanExactlyWhereMeppsIs) {

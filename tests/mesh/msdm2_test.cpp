@@ -100,6 +100,19 @@ TEST(Msdm2, PerVertexMatchesQuantised6Bits) { expect_local_msdm2(6); }
 
 TEST(Msdm2, PerVertexMatchesQuantised8Bits) { expect_local_msdm2(8); }
 
+TEST(Msdm2, ThreadsOptionGivesBitIdenticalResults) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_geonoise.off").mesh;
+  Msdm2Options o;
+  o.direction = Direction::kSymmetric;
+  o.threads = 1;
+  const MeshMetricResult one = compute_msdm2(r, d, o);
+  o.threads = 2;
+  const MeshMetricResult two = compute_msdm2(r, d, o);
+  EXPECT_EQ(one.score, two.score);
+  EXPECT_EQ(one.ref_to_dist->local_distortion, two.ref_to_dist->local_distortion);
+}
+
 TEST(Msdm2, IdenticalMeshesGiveZero) {
   const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
   Msdm2Options o;

@@ -20,6 +20,9 @@ struct Msdm2Options {
   int scales = 3;
   /// Keep the per-vertex local distortion in the result.
   bool per_vertex = true;
+  /// OpenMP threads for every parallel part (0 = the calling thread's OpenMP default). The
+  /// result does not depend on it (bit-identical for any count).
+  int threads = 0;
   /// Optional: told each stage as it starts (progress.h); the result does not depend on it.
   ProgressCallback progress;
 };
