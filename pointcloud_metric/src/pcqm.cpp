@@ -16,9 +16,10 @@ namespace {
 /// which compute_pcqm warns (the radii then differ by as much from the translation-free ones).
 constexpr double kBboxQuirkWarningGap = 0.01;
 
-std::string number(double v) {
+/// `v` with `digits` significant digits (all of them by default).
+std::string number(double v, int digits = 17) {
   std::ostringstream o;
-  o.precision(17);
+  o.precision(digits);
   o << v;
   return o.str();
 }
@@ -73,13 +74,6 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
   return quirk;
 }
 
-std::string significant(double v, int digits) {
-  std::ostringstream o;
-  o.precision(digits);
-  o << v;
-  return o.str();
-}
-
 /// Rounded up to two significant digits.
 double round_up_2(double v) {
   const double unit = std::pow(10.0, std::floor(std::log10(v)) - 1);
@@ -95,7 +89,7 @@ void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_
                                   const std::string& name, const PcqmOptions& o,
                                   std::vector<std::string>& warnings) {
   const auto share = [points](std::size_t count) {
-    return significant(100.0 * double(count) / double(points), 3) + "% of the ";
+    return number(100.0 * double(count) / double(points), 3) + "% of the ";
   };
   const std::string consequence =
       ": they are not determined by the points (fewer than six independent ones, or nearly so), "
@@ -105,10 +99,10 @@ void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_
   if (double(out.underdetermined_curvature) > limit) {
     std::string w = "PCQM: " + share(out.underdetermined_curvature) + name +
                     " cloud's points have an underdetermined curvature fit (quadric on the "
-                    "points within the curvature radius " + significant(o.radius_rel, 3) +
+                    "points within the curvature radius " + number(o.radius_rel, 3) +
                     " x box size)" + consequence + " and so do F1-F3";
     w += out.suggestion.radius_rel > 0
-             ? "; with a curvature radius of " + significant(round_up_2(out.suggestion.radius_rel), 2) +
+             ? "; with a curvature radius of " + number(round_up_2(out.suggestion.radius_rel), 2) +
                    " (qm3d --radius, reference -r) fewer than 0.5% of a sample of points are"
              : "; no curvature radius up to 16 times this one avoids it";
     warnings.push_back(w);
