@@ -94,6 +94,29 @@ TEST_F(Cli, PcqmJsonMatchesTheReference) {
   EXPECT_FALSE(j.contains("directions"));
 }
 
+// A voxelised pair at the default radius: underdetermined curvature fits are reported in the
+// JSON `warnings` and on stderr, with the radius that avoids them; --quiet silences stderr only.
+TEST_F(Cli, UnderdeterminedFitsAreWarnedInJsonAndOnStderr) {
+  const auto voxel = [](const char* name) { return (test::reference_dir() / "voxel" / name).string(); };
+  const std::string pair = voxel("vox1_ref.ply") + " " + voxel("vox1_requant8.ply");
+  const CliRun r = qm3d("pcqm " + pair + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["score"].get<double>(), 0.010431702767312218, 1e-12);
+  std::string warning;
+  for (const auto& w : j["warnings"]) {
+    if (w.get<std::string>().find("underdetermined curvature fit") != std::string::npos) {
+      warning = w.get<std::string>();
+    }
+  }
+  ASSERT_FALSE(warning.empty()) << r.out;
+  EXPECT_NE(warning.find("with a curvature radius of "), std::string::npos) << warning;
+  EXPECT_NE(r.err.find("qm3d: warning: " + warning), std::string::npos) << r.err;
+  const CliRun quiet = qm3d("pcqm " + pair + " --json --quiet");
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_EQ(nlohmann::json::parse(quiet.out)["warnings"], j["warnings"]);
+}
+
 TEST_F(Cli, HumanLineAndCsvAndOutputFile) {
   const std::string pair = cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_bothnoise.off");
   const CliRun text = qm3d("cmdm " + pair);
