@@ -25,8 +25,8 @@ namespace {
 constexpr std::uint32_t kBatchPoints = 16;
 /// Query batches per dynamic-schedule chunk: large enough to keep a thread's queries spatially
 /// coherent, small enough to balance clouds of uneven density.
-constexpr std::int64_t kLeavesPerChunk = 16;
-/// Relative slack on the kNN reach of a leaf, covering the rounding of its computation.
+constexpr std::int64_t kBatchesPerChunk = 16;
+/// Relative slack on the kNN reach of a batch, covering the rounding of its computation.
 constexpr double kReachSlack = 1.0 + 1e-9;
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
@@ -90,9 +90,9 @@ struct Clouds {
 };
 
 struct Stage1Scratch {
-  CandidateSet near_dist;   ///< D's points within r of the leaf's box
-  CandidateSet reach_dist;  ///< D's points within the leaf's kNN reach (gathered when needed)
-  CandidateSet near_ref;    ///< R's points within r of the leaf's box (when positions differ)
+  CandidateSet near_dist;   ///< D's points within r of the batch's box
+  CandidateSet reach_dist;  ///< D's points within the batch's kNN reach (gathered when needed)
+  CandidateSet near_ref;    ///< R's points within r of the batch's box (when positions differ)
   bool have_reach = false;
   /// The last list of D (of R) had equal distances: search the next one in the reference's
   /// order directly (on voxelised clouds nearly every list has ties).
@@ -147,21 +147,21 @@ void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab200
   }
 }
 
-/// Gathers D's points within the kNN reach of the leaf: d_k(q) <= d_k(p0) + |q - p0| for the
-/// leaf's first point p0. Also starts the chain of kNN bounds at p0.
-void gather_reach(const std::array<std::uint32_t, 2>& leaf, const Clouds& c, std::size_t k,
+/// Gathers D's points within the kNN reach of the batch: d_k(q) <= d_k(p0) + |q - p0| for the
+/// batch's first point p0. Also starts the chain of kNN bounds at p0.
+void gather_reach(const std::array<std::uint32_t, 2>& batch, const Clouds& c, std::size_t k,
                   Stage1Scratch& s) {
   const std::vector<Vec3>& points = c.ref_tree.points();
-  const Vec3& p0 = points[leaf[0]];
+  const Vec3& p0 = points[batch[0]];
   c.dist_tree.knn_search(p0, k, s.nearest);
   double spread2 = 0;
-  for (std::uint32_t i = leaf[0] + 1; i < leaf[1]; ++i) {
+  for (std::uint32_t i = batch[0] + 1; i < batch[1]; ++i) {
     spread2 = std::max(spread2, squared_distance(p0, points[i]));
   }
   s.previous = p0;
   s.previous_kth = std::sqrt(s.nearest.back().distance2);
   const double reach = (s.previous_kth + std::sqrt(spread2)) * kReachSlack;
-  s.reach_dist.gather(c.dist_tree, box_of(points, leaf[0], leaf[1]), reach * reach);
+  s.reach_dist.gather(c.dist_tree, box_of(points, batch[0], batch[1]), reach * reach);
   s.have_reach = true;
 }
 
@@ -188,7 +188,7 @@ void sorted_within(const KdTree& tree, CandidateSet& near, const Vec3& p, double
 /// Where equal distances make the reference's choice depend on its traversal (SPEC-PCQM §9: the
 /// first kNN result gives the colour, the k-th place goes to the tie reached first), the kNN is
 /// searched in the reference's order.
-std::uint32_t match(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const Clouds& c,
+std::uint32_t match(const std::array<std::uint32_t, 2>& batch, std::size_t i, const Clouds& c,
                     const DirectionParams& params, const Radii& radii, Stage1Scratch& s,
                     Vec3& correspondence, std::uint8_t& underdetermined) {
   const Vec3& p = c.ref_tree.points()[i];
@@ -206,7 +206,7 @@ std::uint32_t match(const std::array<std::uint32_t, 2>& leaf, std::size_t i, con
   if (s.ties_dist) {
     c.dist_tree.knn_search(p, params.knn, s.nearest);
   } else {
-    if (!s.have_reach) gather_reach(leaf, c, params.knn, s);
+    if (!s.have_reach) gather_reach(batch, c, params.knn, s);
     const double bound =
         (s.previous_kth + std::sqrt(squared_distance(p, s.previous))) * kReachSlack;
     const CandidateSet::Knn found = s.reach_dist.knn(p, params.knn, bound * bound, s.nearest);
@@ -221,12 +221,12 @@ std::uint32_t match(const std::array<std::uint32_t, 2>& leaf, std::size_t i, con
   return s.nearest.front().index;
 }
 
-void stage1_point(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const Clouds& c,
+void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, const Clouds& c,
                   const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                   Stage1Scratch& s, PointData& out) {
   const Vec3& p = c.ref_tree.points()[i];
   const std::uint32_t nearest =
-      match(leaf, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
+      match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
   out.correspondence_is_point[i] = out.correspondence[i] == p;
   const std::vector<Neighbour>& within_ref = c.same_positions ? s.within_dist : s.within_ref;
   if (!c.same_positions) {
@@ -240,15 +240,15 @@ void stage1_point(const std::array<std::uint32_t, 2>& leaf, std::size_t i, const
   colours(i, nearest, c, table, out);
 }
 
-void stage1_leaf(const std::array<std::uint32_t, 2>& leaf, const Clouds& c,
+void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
                  const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                  Stage1Scratch& s, PointData& out) {
-  const Box box = box_of(c.ref_tree.points(), leaf[0], leaf[1]);
+  const Box box = box_of(c.ref_tree.points(), batch[0], batch[1]);
   s.near_dist.gather(c.dist_tree, box, radii.curvature2);
   s.have_reach = false;
   if (!c.same_positions) s.near_ref.gather(c.ref_tree, box, radii.curvature2);
-  for (std::uint32_t i = leaf[0]; i < leaf[1]; ++i) {
-    stage1_point(leaf, i, c, params, radii, table, s, out);
+  for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
+    stage1_point(batch, i, c, params, radii, table, s, out);
   }
 }
 
@@ -270,22 +270,22 @@ std::vector<std::array<std::uint32_t, 2>> query_batches(const KdTree& tree) {
 // Calls visit(batch, scratch) for every query batch of `tree`, in parallel, with one Scratch
 // per thread.
 template <typename Scratch, typename Visit>
-void for_each_leaf(const KdTree& tree, int threads, Visit&& visit) {
-  const auto leaves = query_batches(tree);
-  const auto n = static_cast<std::int64_t>(leaves.size());
+void for_each_batch(const KdTree& tree, int threads, Visit&& visit) {
+  const auto batches = query_batches(tree);
+  const auto n = static_cast<std::int64_t>(batches.size());
 #pragma omp parallel num_threads(thread_count(threads))
   {
     Scratch scratch;
-#pragma omp for schedule(dynamic, kLeavesPerChunk)
-    for (std::int64_t l = 0; l < n; ++l) visit(leaves[std::size_t(l)], scratch);
+#pragma omp for schedule(dynamic, kBatchesPerChunk)
+    for (std::int64_t b = 0; b < n; ++b) visit(batches[std::size_t(b)], scratch);
   }
 }
 
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
                  const Lab2000hlTable& table) {
   PointData out(c.ref_tree.size(), params.diagnostics);
-  for_each_leaf<Stage1Scratch>(c.ref_tree, params.threads, [&](const auto& leaf, auto& scratch) {
-    stage1_leaf(leaf, c, params, radii, table, scratch, out);
+  for_each_batch<Stage1Scratch>(c.ref_tree, params.threads, [&](const auto& batch, auto& scratch) {
+    stage1_batch(batch, c, params, radii, table, scratch, out);
   });
   return out;
 }
@@ -326,12 +326,12 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
 }
 
 /// f1..f3 and s4..s8 (similarities, pooled as the reference pools them) of the points of one
-/// leaf, stored at their input indices.
-void stage2_leaf(const std::array<std::uint32_t, 2>& leaf, const KdTree& ref_tree,
+/// batch, stored at their input indices.
+void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& ref_tree,
                  const PointData& d, const Radii& radii, Stage2Scratch& s,
                  std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
-  s.candidates.gather(ref_tree, box_of(ref_tree.points(), leaf[0], leaf[1]), radii.statistics2);
-  for (std::uint32_t i = leaf[0]; i < leaf[1]; ++i) {
+  s.candidates.gather(ref_tree, box_of(ref_tree.points(), batch[0], batch[1]), radii.statistics2);
+  for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     s.candidates.radius(ref_tree.points()[i], radii.statistics2, s.within);
     gather_samples(i, d, radii, s);
     const std::uint32_t input = ref_tree.input_index()[i];
@@ -344,8 +344,8 @@ std::vector<FeatureVector> stage2(const KdTree& ref_tree, const PointData& d,
                                   const DirectionParams& params, const Radii& radii,
                                   std::vector<std::uint32_t>* counts) {
   std::vector<FeatureVector> features(ref_tree.size());
-  for_each_leaf<Stage2Scratch>(ref_tree, params.threads, [&](const auto& leaf, auto& scratch) {
-    stage2_leaf(leaf, ref_tree, d, radii, scratch, features, counts);
+  for_each_batch<Stage2Scratch>(ref_tree, params.threads, [&](const auto& batch, auto& scratch) {
+    stage2_batch(batch, ref_tree, d, radii, scratch, features, counts);
   });
   return features;
 }
