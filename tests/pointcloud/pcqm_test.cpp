@@ -49,11 +49,15 @@ void expect_score_near(double actual, double expected) {
 
 // ---- every row of pcqm_reference.csv ----
 
-bool warns_of_underdetermined_fits(const PcqmResult& r) {
+std::string warning_containing(const PcqmResult& r, const std::string& text) {
   for (const std::string& w : r.warnings) {
-    if (w.find("underdetermined") != std::string::npos) return true;
+    if (w.find(text) != std::string::npos) return w;
   }
-  return false;
+  return "";
+}
+
+bool warns_of_underdetermined_fits(const PcqmResult& r) {
+  return !warning_containing(r, "underdetermined").empty();
 }
 
 // The score and features of `r` against one row of a reference table.
@@ -143,13 +147,6 @@ TEST(PcqmReferenceData, PerPointScoresAverageToTheScore) {
   // 1 - s: the two agree to rounding.
   const PcqmResult& r = reference_result(reference_row("def_sphere_50k_gnoise0.005"));
   EXPECT_NEAR(mean_pool(r.ref_to_dist.per_point), r.score, 1e-14);
-}
-
-std::string warning_containing(const PcqmResult& r, const std::string& text) {
-  for (const std::string& w : r.warnings) {
-    if (w.find(text) != std::string::npos) return w;
-  }
-  return "";
 }
 
 // On the coarse voxel case most curvature fits are underdetermined at the default radius; the
