@@ -19,7 +19,7 @@
 #include "progress_display.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "report.h"
+#include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
 namespace {
@@ -101,25 +101,19 @@ std::filesystem::path resolve(const std::filesystem::path& list, const std::stri
   return path.is_absolute() ? path : list.parent_path() / path;
 }
 
-std::string resolved_metric(const Pair& pair, const std::filesystem::path& list) {
-  if (pair.metric != "auto") return pair.metric;
-  try {
-    return is_mesh_file(resolve(list, pair.reference)) && is_mesh_file(resolve(list, pair.distorted))
-               ? "cmdm"
-               : "pcqm";
-  } catch (const Error&) {
-    return "auto";  // the run will report why the file cannot be read
-  }
-}
-
-// The metrics of a pair: "compare" becomes one row per metric of compare_metrics (so --resume
-// keys stay (reference, distorted, metric)); anything else is one metric.
+// The metrics of a pair: "compare" becomes one row per metric that applies and "auto" the first
+// (so --resume keys stay (reference, distorted, metric)). Inputs that cannot be recognised keep
+// the name as written: scoring them reports why.
 std::vector<std::string> resolved_metrics(const Pair& pair, const std::filesystem::path& list) {
-  if (pair.metric != "compare") return {resolved_metric(pair, list)};
+  if (pair.metric != "compare" && pair.metric != "auto") return {pair.metric};
   try {
-    return compare_metrics(resolve(list, pair.reference), resolve(list, pair.distorted));
+    const Input ref = registry().read(resolve(list, pair.reference));
+    const Input dist = registry().read(resolve(list, pair.distorted));
+    std::vector<std::string> names;
+    for (const MetricSpec* m : metrics_for(pair.metric, ref, dist)) names.push_back(m->name);
+    return names;
   } catch (const Error&) {
-    return {"cmdm"};  // the run will report why the file cannot be read
+    return {pair.metric};
   }
 }
 
@@ -165,10 +159,12 @@ class Progress {
 std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
-    MetricReport report = run_metric(metric, ref, dist, o.metrics);
-    report.reference = pair.reference;
-    report.distorted = pair.distorted;
-    return {csv_row(report), false};
+    const Input r = registry().read(ref), d = registry().read(dist);
+    const auto specs = metrics_for(metric, r, d);
+    MetricResult result = score(*specs.front(), r, d, o.request);
+    result.provenance.reference = pair.reference;
+    result.provenance.distorted = pair.distorted;
+    return {csv_row(result), false};
   } catch (const std::exception& e) {
     return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true};
   }
@@ -212,8 +208,7 @@ int run_batch(const BatchOptions& o) {
   // concurrent tasks then share that count too).
   BatchOptions per_job = o;
   const int job_threads = std::max(1, total_threads / jobs);
-  per_job.metrics.cmdm.threads = per_job.metrics.msdm2.threads = job_threads;
-  per_job.metrics.pcqm.threads = job_threads;
+  per_job.request.run.threads = job_threads;
   auto worker = [&] {
     omp_set_num_threads(job_threads);
     for (std::size_t i = next++; i < todo.size(); i = next++) {

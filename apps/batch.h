@@ -9,16 +9,15 @@ namespace qm3d::app {
 
 struct BatchOptions {
   std::filesystem::path list;    ///< CSV with columns reference,distorted[,metric]; metric is
-                                 ///< cmdm, msdm2, pcqm, pcqm_sampled, compare (one row
-                                 ///< per metric of compare_metrics) or auto (CMDM for
-                                 ///< meshes, else PCQM)
+                                 ///< a registered metric, compare (one row per metric that
+                                 ///< applies) or auto (commands.h metrics_for)
   std::filesystem::path output;  ///< results CSV (appended to, row by row)
   int jobs = 1;                  ///< pairs scored at the same time
   int threads = 0;               ///< total threads (0 = all cores), shared among the jobs
   bool resume = false;           ///< skip pairs already in `output`
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
-  MetricOptions metrics;
+  ScoreRequest request;          ///< run options (threads set per job) and metric options
 };
 
 /// Runs the batch. Returns 0 when every pair succeeded and 2 when some failed (their rows carry

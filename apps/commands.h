@@ -1,78 +1,50 @@
-// The metric commands of the qm3d tool: load the inputs, call the libraries, build reports.
+// The metric commands of the qm3d tool, driven by the metric registry: which metrics run on a
+// pair, with which options, and the distortion map.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "qm3d/mesh/cmdm.h"
-#include "qm3d/mesh/msdm2.h"
-#include "qm3d/mesh/sampling.h"
-#include "qm3d/pointcloud/pcqm.h"
-#include "report.h"
+#include "qm3d/common/metric.h"
+#include "qm3d/common/result.h"
 
 namespace qm3d::app {
 
-/// Reads any supported file as a point cloud: PLY / PCD through the cloud reader, OBJ / OFF as
-/// the cloud of the mesh's vertices.
-ColoredCloud load_cloud(const std::filesystem::path& path);
+/// The tool's metrics: the mesh module's, then the point-cloud module's.
+const Registry& registry();
 
-/// True when the file is a mesh format with faces (OBJ, OFF, or a PLY with a face element).
-bool is_mesh_file(const std::filesystem::path& path);
-
-/// CMDM on a pair of mesh files; writes the distortion map when `map` is not empty.
-MetricReport run_cmdm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
-                      const mesh::CmdmOptions& options, const std::filesystem::path& map = {});
-
-/// MSDM2 on a pair of mesh files (colours optional and ignored); map as for CMDM.
-MetricReport run_msdm2(const std::filesystem::path& reference,
-                       const std::filesystem::path& distorted, const mesh::Msdm2Options& options,
-                       const std::filesystem::path& map = {});
-
-/// PCQM on a pair of cloud (or mesh) files; writes the distortion map when `map` is not empty.
-MetricReport run_pcqm(const std::filesystem::path& reference, const std::filesystem::path& distorted,
-                      const pointcloud::PcqmOptions& options,
-                      const std::filesystem::path& map = {});
-
-/// Samples drawn from each mesh for "pcqm_sampled" when no --points / --density is given.
-constexpr std::size_t kDefaultSampledPoints = 20000;
-
-/// Options of every metric, for the commands that run several.
-struct MetricOptions {
-  mesh::CmdmOptions cmdm;
-  mesh::Msdm2Options msdm2;
-  pointcloud::PcqmOptions pcqm;
-  /// How "pcqm_sampled" samples both meshes (the same options, seed included, for both).
-  mesh::SamplingOptions sampling{kDefaultSampledPoints, 0, 1};
+/// What a scoring command asks for, for every metric it runs.
+struct ScoreRequest {
+  RunOptions run;  ///< model unset: see `model`
+  /// Values of the metrics' own options given on the command line (each metric takes the names
+  /// it knows, options_for()).
+  OptionValues options = OptionValues::object();
+  /// Weights replacing the published model of the metrics whose model_name() is model->metric
+  /// (every metric taking a model when `model_any_metric`).
+  std::optional<LinearModel> model;
+  bool model_any_metric = false;
 };
 
-/// Samples the surface of a mesh file; a textured OBJ is coloured from its texture at each
-/// sample's UV, any other mesh from its vertex colours (mesh/sampling.h).
-ColoredCloud sample_mesh_file(const std::filesystem::path& path,
-                              const mesh::SamplingOptions& options);
+/// The metrics a command or a batch row names for the pair: a metric's name, "auto" (the first
+/// metric that applies: CMDM for two meshes, PCQM otherwise) or "compare" (every metric that
+/// applies, in registration order).
+std::vector<const MetricSpec*> metrics_for(const std::string& name, const Input& reference,
+                                           const Input& distorted);
 
-/// PCQM on clouds sampled from two mesh files with the same options ("pcqm_sampled").
-MetricReport run_pcqm_sampled(const std::filesystem::path& reference,
-                              const std::filesystem::path& distorted,
-                              const MetricOptions& options);
+/// The run options of one metric of the request (model only where it applies).
+RunOptions run_options_for(const MetricSpec& spec, const ScoreRequest& request);
 
-/// The metrics `compare` runs on the pair: cmdm, msdm2, pcqm (on the vertices) and
-/// pcqm_sampled (on sampled clouds) for two meshes; pcqm for anything else.
-std::vector<std::string> compare_metrics(const std::filesystem::path& reference,
-                                         const std::filesystem::path& distorted);
+/// Runs one metric; writes the distortion map when `map` is not empty.
+MetricResult score(const MetricSpec& spec, const Input& reference, const Input& distorted,
+                   const ScoreRequest& request, const std::filesystem::path& map = {});
 
-/// Every metric of compare_metrics, in that order.
-std::vector<MetricReport> run_compare(const std::filesystem::path& reference,
-                                      const std::filesystem::path& distorted,
-                                      const MetricOptions& options);
-
-/// One metric by name ("cmdm", "msdm2", "pcqm", "pcqm_sampled"); FormatError for an unknown
-/// name.
-MetricReport run_metric(const std::string& metric, const std::filesystem::path& reference,
-                        const std::filesystem::path& distorted, const MetricOptions& options);
-
-/// Option values as the tool names them (for --help and the JSON "options" echo).
-std::string direction_name(mesh::Direction d);
-std::string bbox_mode_name(pointcloud::BboxMode m);
+/// Writes the per-element values of `result` on the iterated input's geometry (with faces for a
+/// metric that reads meshes): the metric's default single direction when computed, else the
+/// other (MEPP2 maps CMDM's dist->ref). InputError when the metric has no per-element values on
+/// its inputs.
+void write_map(const std::filesystem::path& map, const MetricSpec& spec, const MetricResult& result,
+               const Input& reference, const Input& distorted);
 
 }  // namespace qm3d::app

@@ -11,7 +11,7 @@
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/version.h"
-#include "report.h"
+#include "qm3d/common/result_io.h"
 #include "score_table.h"
 #include "train_command.h"
 

@@ -4,6 +4,8 @@
 #include <omp.h>
 
 #include <fstream>
+#include <map>
+#include <set>
 #include <iostream>
 #include <sstream>
 
@@ -17,7 +19,7 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/model_io.h"
 #include "qm3d/common/version.h"
-#include "report.h"
+#include "qm3d/common/result_io.h"
 #include "sample_commands.h"
 
 namespace qm3d::app {
@@ -78,45 +80,180 @@ void add_output_options(CLI::App* cmd, OutputOptions& o, bool with_map) {
   }
 }
 
-void add_cmdm_options(CLI::App* cmd, mesh::CmdmOptions& o, std::string& direction,
-                      std::vector<double>& weights) {
-  cmd->add_option("--direction", direction,
-                  "symmetric: mean of both directions; dist-to-ref: distorted vertices matched on "
-                  "the reference (MEPP2's test_cmdm); ref-to-dist: the reverse")
-      ->check(CLI::IsMember({"symmetric", "dist-to-ref", "ref-to-dist"}))
-      ->capture_default_str();
-  cmd->add_option("--scales", o.scales, "Number of scales (curvature radius 0.001 + 0.0005 l of BB)")
-      ->check(CLI::Range(1, 100))
-      ->capture_default_str();
-  cmd->add_option("--weights", weights,
-                  "Weights of f1..f8 (8 numbers); default 0,0.091,0,0,0.22,0.032,0.656,0")
-      ->expected(8)
-      ->delimiter(',');
+// The values of the metrics' own options as given on the command line (before conversion).
+struct MetricOptionsCli {
+  std::map<std::string, std::string> text;  // name -> value as typed
+  std::map<std::string, bool> flags;        // boolean options
+  std::map<std::string, CLI::Option*> given;
+};
+
+// Adds --NAME for each option of `specs`, once per name (compare/batch take the options of every
+// metric; a value given applies to each metric that has an option of that name).
+// CLI11's check of a number option: its range, or its sign when the range is open-ended.
+CLI::Validator range_check(const OptionSpec& o) {
+  constexpr double kOpenEnded = 1e12;
+  if (o.max >= kOpenEnded && o.min == 0) {
+    return o.min_exclusive ? CLI::Validator(CLI::PositiveNumber)
+                           : CLI::Validator(CLI::NonNegativeNumber);
+  }
+  if (o.max >= kOpenEnded && o.min == 1 && o.default_value.is_number_integer()) {
+    return CLI::PositiveNumber;
+  }
+  if (o.default_value.is_number_integer()) {
+    return CLI::Range(static_cast<long long>(o.min), static_cast<long long>(o.max));
+  }
+  return CLI::Range(o.min, o.max);
 }
 
-void add_pcqm_options(CLI::App* cmd, pointcloud::PcqmOptions& o, std::string& bbox) {
-  cmd->add_option("--radius", o.radius_rel, "Curvature radius as a fraction of the bounding box")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--knn", o.knn, "Neighbours of the quadric fit used for the correspondence")
-      ->check(CLI::Range(1, 10000))
-      ->capture_default_str();
-  cmd->add_option("--rx", o.radius_factor, "Statistics radius = rx * curvature radius")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_option("--bbox", bbox,
-                  "reference: the reference tool's |min|+|max| box size (matches published PCQM "
-                  "values; warns when it is >1% off the true size); extent: the true longest side")
-      ->check(CLI::IsMember({"reference", "extent"}))
-      ->capture_default_str();
-  cmd->add_flag("--symmetric", o.symmetric,
-                "Average both directions (default: reference -> distorted, as PCQM defines it)");
+// The help of an option: its metric's, or each metric's when several have an option of that
+// name with different help ("cmdm: ...; msdm2: ...").
+std::string option_help(const std::vector<const MetricSpec*>& specs, const std::string& name) {
+  std::vector<std::pair<std::string, std::string>> helps;
+  for (const MetricSpec* spec : specs) {
+    for (const OptionSpec& o : spec->options) {
+      if (o.name != name) continue;
+      const bool seen = std::any_of(helps.begin(), helps.end(),
+                                    [&](const auto& h) { return h.second == o.help; });
+      if (!seen) helps.emplace_back(spec->name, o.help);
+    }
+  }
+  if (helps.size() == 1) return helps.front().second;
+  std::string text;
+  for (const auto& [metric, help] : helps) text += (text.empty() ? "" : "; ") + metric + ": " + help;
+  return text;
 }
 
-mesh::Direction parse_direction(const std::string& s) {
-  if (s == "dist-to-ref") return mesh::Direction::kDistToRef;
-  if (s == "ref-to-dist") return mesh::Direction::kRefToDist;
-  return mesh::Direction::kSymmetric;
+void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& specs,
+                        MetricOptionsCli& cli) {
+  std::set<std::string> added;
+  for (const MetricSpec* spec : specs) {
+    for (const OptionSpec& o : spec->options) {
+      if (!added.insert(o.name).second) continue;
+      const std::string flag = "--" + o.name;
+      const std::string help = option_help(specs, o.name);
+      const nlohmann::json& d = o.default_value;
+      if (d.is_boolean()) {
+        cli.given[o.name] = cmd->add_flag(flag, cli.flags[o.name], help);
+        continue;
+      }
+      CLI::Option* opt = cmd->add_option(flag, cli.text[o.name], help);
+      if (d.is_array()) {
+        opt->type_name("LIST")->default_str(d.dump());
+      } else {
+        opt->default_str(d.is_string() ? d.get<std::string>() : d.dump());
+      }
+      if (!o.choices.empty()) opt->check(CLI::IsMember(o.choices));
+      if (d.is_number()) {
+        opt->type_name(d.is_number_integer() ? "INT" : "FLOAT");
+        opt->check(range_check(o));
+      }
+      cli.given[o.name] = opt;
+    }
+  }
+}
+
+// The options given, converted to their types (checked later against each metric's spec).
+OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
+                                  const MetricOptionsCli& cli) {
+  OptionValues values = OptionValues::object();
+  for (const MetricSpec* spec : specs) {
+    for (const OptionSpec& o : spec->options) {
+      const auto it = cli.given.find(o.name);
+      if (it == cli.given.end() || it->second->count() == 0 || values.contains(o.name)) continue;
+      const nlohmann::json& d = o.default_value;
+      if (d.is_boolean()) {
+        values[o.name] = cli.flags.at(o.name);
+        continue;
+      }
+      const std::string& text = cli.text.at(o.name);
+      const auto bad = [&] {
+        return std::invalid_argument("--" + o.name + ": '" + text + "' is not " +
+                                     (d.is_number_integer() ? "an integer"
+                                      : d.is_number()       ? "a number"
+                                                            : "a list of numbers"));
+      };
+      try {
+        std::size_t used = 0;
+        if (d.is_number_integer()) {
+          const long long v = std::stoll(text, &used);
+          if (used != text.size()) throw bad();
+          values[o.name] = v;
+        } else if (d.is_number()) {
+          const double v = std::stod(text, &used);
+          if (used != text.size()) throw bad();
+          values[o.name] = v;
+        } else if (d.is_array()) {
+          nlohmann::json list = nlohmann::json::array();
+          std::stringstream in(text);
+          std::string item;
+          while (std::getline(in, item, ',')) {
+            list.push_back(std::stod(item, &used));
+            if (used != item.size()) throw bad();
+          }
+          values[o.name] = list;
+        } else {
+          values[o.name] = text;
+        }
+      } catch (const std::logic_error&) {  // std::stod's invalid_argument / out_of_range
+        throw bad();
+      }
+    }
+  }
+  return values;
+}
+
+// --direction / --symmetric, --weights / --model: the run options every metric command has.
+struct RunCli {
+  std::string direction;
+  bool symmetric = false;
+  std::vector<double> weights;
+  std::string model_file;
+};
+
+void add_run_options(CLI::App* cmd, RunCli& r, const MetricSpec* spec) {
+  const std::string help =
+      spec ? spec->direction_help + " (default " + direction_name(spec->default_direction) + ")"
+           : "symmetric, dist-to-ref or ref-to-dist, for every metric (default: each metric's "
+             "own: CMDM symmetric, MSDM2 dist-to-ref, PCQM ref-to-dist)";
+  auto* direction = cmd->add_option("--direction", r.direction, help)
+                        ->check(CLI::IsMember({"symmetric", "dist-to-ref", "ref-to-dist"}));
+  cmd->add_flag("--symmetric", r.symmetric, "Same as --direction symmetric")->excludes(direction);
+  if (spec && !spec->takes_model) return;
+  CLI::Option* weights = nullptr;
+  if (spec) {
+    weights = cmd->add_option("--weights", r.weights,
+                                       "Weights of the 8 features replacing the published model")
+                           ->expected(8)
+                           ->delimiter(',');
+  }
+  auto* model = cmd->add_option("--model", r.model_file,
+                                spec ? std::string(kModelHelp)
+                                     : std::string(kModelHelp) +
+                                           "; applies to the metric the file names")
+                    ->type_name("MODEL.json");
+  if (weights) model->excludes(weights);
+}
+
+// The request of a metric command (`spec` set) or of compare / batch.
+ScoreRequest score_request(const GlobalOptions& g, const RunCli& r, const MetricSpec* spec) {
+  ScoreRequest req;
+  req.run.threads = g.threads;
+  req.run.data_dir = g.data_dir;
+  if (r.symmetric) req.run.direction = Direction::kSymmetric;
+  if (!r.direction.empty()) req.run.direction = parse_direction(r.direction);
+  if (!r.weights.empty()) {
+    LinearModel m;
+    m.metric = spec->model_name();
+    std::copy(r.weights.begin(), r.weights.end(), m.weights.begin());
+    m.provenance = "--weights";
+    req.model = m;
+    req.model_any_metric = true;
+  } else if (!r.model_file.empty()) {
+    const std::string metric = spec ? spec->model_name() : read_model(r.model_file).model.metric;
+    req.model = read_model_for(r.model_file, metric);
+    req.model_any_metric = spec != nullptr;
+  }
+  return req;
 }
 
 // Writes text to stdout or, atomically, to the requested file.
@@ -129,111 +266,112 @@ void emit(const std::string& text, const std::string& output) {
   write_file_atomically(output, [&](std::ostream& out) { out << text; });
 }
 
-void print_warnings(const std::vector<MetricReport>& reports, bool quiet) {
+void print_warnings(const std::vector<MetricResult>& results, bool quiet) {
   if (quiet) return;
-  for (const auto& r : reports) {
+  for (const auto& r : results) {
     for (const auto& w : r.warnings) std::cerr << "qm3d: warning: " << w << "\n";
   }
 }
 
-std::string render(const std::vector<MetricReport>& reports, const OutputOptions& o,
+std::string render(const std::vector<MetricResult>& results, const OutputOptions& o,
                    bool as_compare) {
   std::ostringstream out;
   if (o.json) {
-    if (!as_compare) {
-      out << to_json(reports.front()).dump(2) << "\n";
-    } else {
-      nlohmann::json j = {{"metric", "compare"}, {"version", kVersion},
-                          {"reference", reports.front().reference},
-                          {"distorted", reports.front().distorted}};
-      for (const auto& r : reports) j["metrics"][r.metric] = to_json(r);
-      out << j.dump(2) << "\n";
-    }
+    out << (as_compare ? compare_json(results) : to_json(results.front())).dump(2) << "\n";
   } else if (o.csv) {
     out << csv_header() << "\n";
-    for (const auto& r : reports) out << csv_row(r) << "\n";
+    for (const auto& r : results) out << csv_row(r) << "\n";
   } else {
-    for (const auto& r : reports) out << text_line(r) << "\n";
+    for (const auto& r : results) out << text_line(r) << "\n";
   }
   return out.str();
+}
+
+// One command per registered metric, plus compare: REF DIST, the metric's options, output.
+struct ScoreCommand {
+  const MetricSpec* spec = nullptr;  // nullptr: compare
+  CLI::App* cmd = nullptr;
+};
+
+struct ScoreCli {
+  std::string ref, dist;
+  bool progress = false;
+  RunCli run;
+  MetricOptionsCli options;
+  OutputOptions out;
+};
+
+std::vector<const MetricSpec*> all_metrics() {
+  std::vector<const MetricSpec*> all;
+  for (const auto& m : registry().metrics()) all.push_back(&m);
+  return all;
+}
+
+int run_score_command(const ScoreCommand& c, ScoreCli& cli, const GlobalOptions& g) {
+  const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
+                                                      : all_metrics();
+  ScoreRequest request = score_request(g, cli.run, c.spec);
+  request.options = metric_option_values(specs, cli.options);
+  const Input ref = registry().read(cli.ref), dist = registry().read(cli.dist);
+  const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
+  std::vector<MetricResult> results;
+  const bool show = !g.quiet && (cli.progress || stderr_is_terminal());
+  for (const MetricSpec* spec : chosen) {
+    ScoreRequest r = request;
+    if (show) r.run.progress = stderr_progress(spec->title, stderr_is_terminal());
+    results.push_back(score(*spec, ref, dist, r, c.spec ? cli.out.map : std::string()));
+  }
+  print_warnings(results, g.quiet);
+  emit(render(results, cli.out, c.spec == nullptr), cli.out.output);
+  return kExitOk;
 }
 
 int run(int argc, char** argv) {
   CLI::App app{"qm3d " + std::string(kVersion) +
                " - visual quality metrics for coloured 3D content: CMDM for meshes with vertex "
                "colours, PCQM for coloured point clouds.\nScores are distortions: 0 means "
-               "identical, larger is worse."};
+               "identical, larger is worse. Inputs are recognised by content (PLY, OBJ, OFF, "
+               "PCD); a PLY with faces is a mesh."};
   app.set_version_flag("--version", std::string("qm3d ") + kVersion);
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);
-  bool progress = false;
-  std::string ref, dist, direction = "symmetric", bbox = "reference";
-  std::vector<double> weights;
-  mesh::CmdmOptions cmdm;
-  pointcloud::PcqmOptions pcqm;
-  OutputOptions out;
 
-  auto* cmdm_cmd = app.add_subcommand("cmdm", "CMDM between two coloured meshes (OBJ, OFF, PLY)");
-  add_global_options(cmdm_cmd, global);
-  add_progress_flag(cmdm_cmd, progress);
-  cmdm_cmd->add_option("REF", ref, "Reference mesh")->required();
-  cmdm_cmd->add_option("DIST", dist, "Distorted mesh")->required();
-  add_cmdm_options(cmdm_cmd, cmdm, direction, weights);
-  std::string model_file;
-  cmdm_cmd->add_option("--model", model_file, kModelHelp)
-      ->type_name("MODEL.json")
-      ->excludes("--weights");
-  add_output_options(cmdm_cmd, out, true);
-
-  mesh::Msdm2Options msdm2;
-  std::string msdm2_direction = "dist-to-ref";
-  auto* msdm2_cmd = app.add_subcommand(
-      "msdm2", "MSDM2 (geometry only; colours ignored) between two meshes (OBJ, OFF, PLY)");
-  add_global_options(msdm2_cmd, global);
-  add_progress_flag(msdm2_cmd, progress);
-  msdm2_cmd->add_option("REF", ref, "Reference mesh")->required();
-  msdm2_cmd->add_option("DIST", dist, "Distorted mesh")->required();
-  msdm2_cmd->add_option("--direction", msdm2_direction,
-                        "dist-to-ref (MEPP2's example_msdm2), ref-to-dist or symmetric")
-      ->check(CLI::IsMember({"symmetric", "dist-to-ref", "ref-to-dist"}))
-      ->capture_default_str();
-  msdm2_cmd->add_option("--scales", msdm2.scales,
-                        "Number of scales (curvature radius (0.002 + 0.001 l) of BB)")
-      ->check(CLI::Range(1, 100))
-      ->capture_default_str();
-  add_output_options(msdm2_cmd, out, true);
-
-  auto* pcqm_cmd = app.add_subcommand("pcqm", "PCQM between two coloured point clouds (PLY, PCD; "
-                                              "OBJ/OFF/PLY meshes are read as their vertices)");
-  add_global_options(pcqm_cmd, global);
-  add_progress_flag(pcqm_cmd, progress);
-  pcqm_cmd->add_option("REF", ref, "Reference cloud (PCQM's first argument)")->required();
-  pcqm_cmd->add_option("DIST", dist, "Distorted cloud")->required();
-  add_pcqm_options(pcqm_cmd, pcqm, bbox);
-  pcqm_cmd->add_option("--model", model_file, kModelHelp)->type_name("MODEL.json");
-  add_output_options(pcqm_cmd, out, true);
-
-  auto* compare_cmd = app.add_subcommand(
-      "compare", "Every metric that applies: CMDM, MSDM2, PCQM on the vertices and PCQM on "
-                 "surface samples (pcqm_sampled; both meshes sampled alike) for two meshes, PCQM "
-                 "for two clouds");
-  add_global_options(compare_cmd, global);
-  add_progress_flag(compare_cmd, progress);
-  compare_cmd->add_option("REF", ref, "Reference")->required();
-  compare_cmd->add_option("DIST", dist, "Distorted")->required();
-  add_output_options(compare_cmd, out, false);
-  SamplingCli sampling;
-  const std::string sampling_note =
-      " for pcqm_sampled (default " + std::to_string(kDefaultSampledPoints) + ")";
-  add_sampling_options(compare_cmd, sampling, sampling_note);
+  // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
+  ScoreCli score_cli;
+  std::vector<ScoreCommand> score_commands;
+  for (const MetricSpec& spec : registry().metrics()) {
+    score_commands.push_back({&spec, app.add_subcommand(spec.name, spec.summary)});
+  }
+  score_commands.push_back(
+      {nullptr, app.add_subcommand("compare",
+                                   "Every metric that applies: CMDM, MSDM2, PCQM on the vertices "
+                                   "and PCQM on surface samples (pcqm_sampled; both meshes "
+                                   "sampled alike) for two meshes, PCQM for two clouds")});
+  for (const ScoreCommand& c : score_commands) {
+    add_global_options(c.cmd, global);
+    add_progress_flag(c.cmd, score_cli.progress);
+    c.cmd->add_option("REF", score_cli.ref, "Reference")->required();
+    c.cmd->add_option("DIST", score_cli.dist, "Distorted")->required();
+    add_run_options(c.cmd, score_cli.run, c.spec);
+    add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
+                       score_cli.options);
+    add_output_options(c.cmd, score_cli.out, c.spec && c.spec->per_element_on_input);
+  }
 
   BatchOptions batch;
+  RunCli batch_run;
+  MetricOptionsCli batch_options;
   std::string list, results;
+  std::string metric_names;
+  for (const auto& m : registry().metrics()) metric_names += m.name + ", ";
   auto* batch_cmd = app.add_subcommand(
-      "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = cmdm, "
-               "msdm2, pcqm, pcqm_sampled, compare (one row per metric) or auto (CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's folder). Each row is appended "
-               "to RESULTS as soon as it is done; a failing pair records its error in its row");
+      "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = " +
+                   metric_names +
+                   "compare (one row per metric that applies) or auto (the first that applies: "
+                   "CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's "
+                   "folder). Each row is appended to RESULTS as soon as it is done; a failing "
+                   "pair records its error in its row");
   add_global_options(batch_cmd, global);
   batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
   batch_cmd->add_option("-o,--output", results, "Results CSV")->required()->type_name("RESULTS.csv");
@@ -242,12 +380,11 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   batch_cmd->add_flag("--resume", batch.resume, "Skip the pairs already in RESULTS");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
-  add_cmdm_options(batch_cmd, cmdm, direction, weights);
-  add_pcqm_options(batch_cmd, pcqm, bbox);
-  add_sampling_options(batch_cmd, sampling, sampling_note);
+  add_run_options(batch_cmd, batch_run, nullptr);
+  add_metric_options(batch_cmd, all_metrics(), batch_options);
 
-  auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d and print "
-                                              "the table");
+  auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d with "
+                                              "every metric that applies and print the table");
   add_global_options(demo_cmd, global);
   std::string demo_dir = default_demo_dir().string();
   demo_cmd->add_option("--dir", demo_dir, "Folder of the bundled stimuli")->capture_default_str();
@@ -267,46 +404,22 @@ int run(int argc, char** argv) {
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   if (const auto code = run_sample_commands(*sample_commands)) return *code;
-  cmdm.direction = parse_direction(direction);
-  if (!weights.empty()) std::copy(weights.begin(), weights.end(), cmdm.model.weights.begin());
-  cmdm.model.provenance = weights.empty() ? cmdm.model.provenance : "--weights";
-  if (!model_file.empty() && *cmdm_cmd) cmdm.model = read_model_for(model_file, "cmdm");
-  if (!model_file.empty() && *pcqm_cmd) pcqm.model = read_model_for(model_file, "pcqm");
-  pcqm.bbox = bbox == "extent" ? pointcloud::BboxMode::kExtent : pointcloud::BboxMode::kReference;
-  cmdm.data_dir = pcqm.data_dir = global.data_dir;
-  cmdm.threads = pcqm.threads = global.threads;
-  msdm2.threads = global.threads;
-  msdm2.direction = parse_direction(msdm2_direction);
-  // One pair: its stages on stderr (batch shows pairs done instead).
-  const bool single_pair = *cmdm_cmd || *msdm2_cmd || *pcqm_cmd || *compare_cmd;
-  if (single_pair && !global.quiet && (progress || stderr_is_terminal())) {
-    const bool in_place = stderr_is_terminal();
-    cmdm.progress = stderr_progress("CMDM", in_place);
-    msdm2.progress = stderr_progress("MSDM2", in_place);
-    pcqm.progress = stderr_progress("PCQM", in_place);
-  }
-  const MetricOptions metrics{cmdm, msdm2, pcqm,
-                              to_sampling_options(sampling, kDefaultSampledPoints)};
-
-  std::vector<MetricReport> reports;
-  if (*cmdm_cmd) reports.push_back(run_cmdm(ref, dist, cmdm, out.map));
-  if (*msdm2_cmd) reports.push_back(run_msdm2(ref, dist, msdm2, out.map));
-  if (*pcqm_cmd) reports.push_back(run_pcqm(ref, dist, pcqm, out.map));
-  if (*compare_cmd) reports = run_compare(ref, dist, metrics);
-  if (!reports.empty()) {
-    print_warnings(reports, global.quiet);
-    emit(render(reports, out, compare_cmd->parsed()), out.output);
-    return kExitOk;
+  for (const ScoreCommand& c : score_commands) {
+    if (*c.cmd) return run_score_command(c, score_cli, global);
   }
   if (*batch_cmd) {
     batch.list = list;
     batch.output = results;
     batch.threads = global.threads;
     batch.quiet = global.quiet;
-    batch.metrics = metrics;
+    batch.request = score_request(global, batch_run, nullptr);
+    batch.request.options = metric_option_values(all_metrics(), batch_options);
     return run_batch(batch);
   }
-  return run_demo(demo_dir, cmdm, pcqm, std::cout);
+  ScoreRequest demo;
+  demo.run.threads = global.threads;
+  demo.run.data_dir = global.data_dir;
+  return run_demo(demo_dir, demo, std::cout);
 }
 
 }  // namespace

@@ -47,7 +47,9 @@ int run_sample(const SampleCommands& c) {
   }
   const ColoredCloud cloud = c.vertices
                                  ? vertex_cloud_of(c.input)
-                                 : sample_mesh_file(c.input, to_sampling_options(c.sampling, 0));
+                                 : registry().sampler()(registry().read(c.input),
+                                                        {c.sampling.points, c.sampling.density,
+                                                         c.sampling.seed});
   write_colored_ply(c.output, cloud.positions, cloud.colors, {});
   return 0;
 }
@@ -70,11 +72,6 @@ void add_sampling_options(CLI::App* cmd, SamplingCli& s, const std::string& defa
       ->excludes(points);
   cmd->add_option("--seed", s.seed, "Seed of the sampling (same seed, same cloud)")
       ->capture_default_str();
-}
-
-mesh::SamplingOptions to_sampling_options(const SamplingCli& s, std::size_t default_points) {
-  if (s.density != 0) return {0, s.density, s.seed};
-  return {s.points > 0 ? s.points : default_points, 0, s.seed};
 }
 
 std::unique_ptr<SampleCommands> add_sample_commands(

@@ -1,6 +1,5 @@
 // `qm3d sample` (a mesh's surface as a coloured point cloud) and `qm3d texture-to-vertex` (a
-// textured OBJ's texture colours transferred to its vertices), and the sampling options that
-// `compare` and `batch` share.
+// textured OBJ's texture colours transferred to its vertices).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -10,7 +9,6 @@
 #include <optional>
 #include <string>
 
-#include "qm3d/mesh/sampling.h"
 
 namespace qm3d::app {
 
@@ -23,9 +21,6 @@ struct SamplingCli {
 
 /// Adds --points, --density (mutually exclusive) and --seed to `cmd`.
 void add_sampling_options(CLI::App* cmd, SamplingCli& s, const std::string& default_note);
-
-/// The library options: `default_points` samples when neither --points nor --density is given.
-mesh::SamplingOptions to_sampling_options(const SamplingCli& s, std::size_t default_points);
 
 /// The two subcommands and the values CLI11 parses their options into.
 struct SampleCommands {

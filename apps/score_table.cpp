@@ -8,7 +8,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "report.h"
+#include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
 namespace {

@@ -13,7 +13,7 @@
 #include "qm3d/common/model_io.h"
 #include "qm3d/common/training.h"
 #include "qm3d/common/version.h"
-#include "report.h"
+#include "qm3d/common/result_io.h"
 #include "score_table.h"
 
 namespace qm3d::app {

@@ -359,7 +359,11 @@ MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::stri
 }
 
 MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& options) {
-  const MeshFormat format = format_of(path);
+  return read_mesh(path, format_of(path), options);
+}
+
+MeshFile read_mesh(const std::filesystem::path& path, MeshFormat format,
+                   const MeshReadOptions& options) {
   const std::string bytes = read_file_bytes(path);
   // Colours of a textured OBJ come from its texture (texture.h); MSDM2 ignores colours.
   if (format == MeshFormat::kObj && options.require_colors && obj_is_textured(bytes)) {
@@ -369,7 +373,10 @@ MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& opt
 }
 
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
-  const MeshFormat format = format_of(path);
+  return read_mesh_vertices(path, format_of(path));
+}
+
+ColoredCloud read_mesh_vertices(const std::filesystem::path& path, MeshFormat format) {
   const std::string bytes = read_file_bytes(path);
   if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
     return vertex_cloud(parse_textured_obj(bytes, path).file.mesh);

@@ -1,6 +1,12 @@
 #include "qm3d/mesh/msdm2.h"
 
+#include <chrono>
+#include <stdexcept>
+
+#include "mesh_inputs.h"
 #include "multiscale.h"
+#include "qm3d/mesh/metrics.h"
+#include "qm3d/common/version.h"
 #include "qm3d/common/pooling.h"
 
 namespace qm3d::mesh {
@@ -14,19 +20,59 @@ constexpr double kMinkowskiExponent = 3.0;
 
 }  // namespace
 
-MeshMetricResult compute_msdm2(const ColoredMesh& reference, const ColoredMesh& distorted,
-                               const Msdm2Options& options) {
+MetricResult compute_msdm2(const ColoredMesh& reference, const ColoredMesh& distorted,
+                           const Msdm2Options& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (options.model) {
+    throw std::invalid_argument("MSDM2 has no linear model: weights and model files do not apply");
+  }
+  const Direction direction = options.direction.value_or(kMsdm2DefaultDirection);
   const auto pool = [&](const std::vector<FeatureVector>& sums, int scales, DirectionResult& r) {
     std::vector<double> local(sums.size());
     for (std::size_t v = 0; v < sums.size(); ++v) local[v] = kMsdm2Local.apply(sums[v]) / scales;
     r.features = mean_features(sums);
     for (double& f : r.features) f /= scales;
     r.score = minkowski_pool(local, kMinkowskiExponent);
-    if (options.per_vertex) r.local_distortion = std::move(local);
+    if (options.per_element) r.per_element = std::move(local);
   };
-  const detail::MultiscaleRun run{options.direction, options.scales, options.threads, nullptr,
+  const detail::MultiscaleRun run{direction, options.scales, options.threads, nullptr,
                                   options.progress};
-  return detail::run_multiscale(reference, distorted, detail::kMsdm2Definition, run, pool);
+  MetricResult result =
+      detail::run_multiscale(reference, distorted, detail::kMsdm2Definition, run, pool);
+  result.metric = "msdm2";
+  result.feature_names = feature_names("f");
+  result.provenance.version = kVersion;
+  result.provenance.options = {{"direction", direction_name(direction)},
+                               {"scales", options.scales}};
+  result.provenance.seconds = seconds_since(start);
+  return result;
+}
+
+}  // namespace qm3d::mesh
+
+namespace qm3d::mesh {
+
+MetricSpec msdm2_spec() {
+  MetricSpec s;
+  s.name = "msdm2";
+  s.title = "MSDM2";
+  s.summary = "MSDM2 (geometry only; colours ignored) between two meshes (OBJ, OFF, PLY)";
+  s.applies_to = AppliesTo::kMeshes;
+  s.reads = Input::Kind::kMesh;
+  s.default_direction = kMsdm2DefaultDirection;
+  s.direction_help = "dist-to-ref (MEPP2's example_msdm2), ref-to-dist or symmetric";
+  s.options = {{"scales", "Number of scales (curvature radius (0.002 + 0.001 l) of BB)", 3, {}, 1,
+                100}};
+  s.run = [](const MetricSpec& spec, const Input& ref, const Input& dist, const RunOptions& run,
+             const OptionValues& values) {
+    auto o = detail::with_run_options<Msdm2Options>(run);
+    o.scales = values.at("scales").get<int>();
+    MetricResult r = compute_msdm2(detail::input_mesh(ref, false, spec.title),
+                                   detail::input_mesh(dist, false, spec.title), o);
+    detail::add_reader_warnings(r, ref, dist);
+    return r;
+  };
+  return s;
 }
 
 }  // namespace qm3d::mesh

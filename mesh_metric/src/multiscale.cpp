@@ -167,7 +167,7 @@ DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& sec
                               std::optional<SurfaceMatches> matching, const std::string& label,
                               ProgressSteps& progress) {
   DirectionResult result;
-  result.bbox_max_side = first.bbox_max_side;
+  result.box_size = first.bbox_max_side;
   if (!matching) {
     progress.begin(label + ": closest points");
     matching = match(first, second, def, threads);
@@ -176,15 +176,15 @@ DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& sec
                              label, progress);
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
-  if (result.local_distortion.size() > first.input_vertices) {
-    result.local_distortion.resize(first.input_vertices);
+  if (result.per_element.size() > first.input_vertices) {
+    result.per_element.resize(first.input_vertices);
   }
   return result;
 }
 
 }  // namespace
 
-MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
+MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
                                 const MultiscaleDefinition& def, const MultiscaleRun& run,
                                 const DirectionPooling& pool) {
   if (run.scales < 1 || run.scales > 100) {
@@ -207,7 +207,7 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
       std::async(concurrent ? std::launch::async : std::launch::deferred, prepare_ref);
   const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def, per_task);
   const PreparedMesh ref = ref_task.get();
-  MeshMetricResult result;
+  MetricResult result;
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
@@ -232,8 +232,7 @@ MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh&
     result.ref_to_dist = run_direction(ref, dist, def, run.scales, threads, curvatures, pool,
                                        std::move(r2d_matches), "ref→dist", progress);
   }
-  result.score = both ? (result.dist_to_ref->score + result.ref_to_dist->score) / 2
-                      : (result.dist_to_ref ? result.dist_to_ref->score : result.ref_to_dist->score);
+  combine_directions(result);
   progress.finish();
   return result;
 }

@@ -13,7 +13,7 @@
 #include "qm3d/common/color.h"
 #include "qm3d/common/features.h"
 #include "qm3d/common/progress.h"
-#include "qm3d/mesh/mesh_metric.h"
+#include "qm3d/common/result.h"
 
 namespace qm3d::mesh::detail {
 
@@ -71,7 +71,7 @@ struct MultiscaleRun {
 
 /// Runs a metric on a pair of meshes: prepares both, computes the requested directions, and
 /// averages them for the symmetric score.
-MeshMetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
+MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
                                 const MultiscaleDefinition& definition, const MultiscaleRun& run,
                                 const DirectionPooling& pool);
 

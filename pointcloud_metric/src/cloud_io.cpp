@@ -294,4 +294,8 @@ ColoredCloud read_cloud(const std::filesystem::path& path) {
                     path.extension().string() + "' (expected .ply or .pcd)");
 }
 
+ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format) {
+  return format == CloudFormat::kPcd ? read_pcd(path) : read_ply(path);
+}
+
 }  // namespace qm3d::pointcloud

@@ -1,13 +1,17 @@
 #include "qm3d/pointcloud/pcqm.h"
 
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "pcqm_internal.h"
+#include "pcqm_spec.h"
+#include "qm3d/pointcloud/metrics.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/pooling.h"
+#include "qm3d/common/version.h"
 
 namespace qm3d::pointcloud {
 namespace {
@@ -42,7 +46,7 @@ void validate(const PcqmOptions& o) {
 void validate(const ColoredCloud& cloud, const std::string& name) {
   if (cloud.positions.empty()) throw NumericError("PCQM: the " + name + " cloud is empty");
   if (cloud.colors.size() != cloud.positions.size()) {
-    throw NumericError("PCQM: the " + name + " cloud has " +
+    throw FormatError("PCQM: the " + name + " cloud has " +
                        std::to_string(cloud.positions.size()) + " points but " +
                        std::to_string(cloud.colors.size()) + " colours");
   }
@@ -120,10 +124,11 @@ void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_
   }
 }
 
-PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
-                        const std::string& iterated_name, const PcqmOptions& o,
-                        const Lab2000hlTable& table, std::vector<std::string>& warnings,
-                        std::string label, ProgressSteps& progress) {
+DirectionResult direction(const ColoredCloud& iterated, const ColoredCloud& other,
+                          const std::string& iterated_name, const PcqmOptions& o,
+                          const LinearModel& model, const Lab2000hlTable& table,
+                          std::vector<std::string>& warnings, std::string label,
+                          ProgressSteps& progress) {
   detail::DirectionParams params;
   params.max_dim = max_dim(iterated, o.bbox, iterated_name, warnings);
   params.radius_rel = o.radius_rel;
@@ -135,14 +140,14 @@ PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
   const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
   warn_of_underdetermined_fits(out, iterated.size(), iterated_name, o, warnings);
 
-  PcqmDirection d;
+  DirectionResult d;
   d.features = out.pooled;
-  d.score = o.model.apply(d.features);
-  d.bbox_max_side = params.max_dim;
-  if (o.per_point) {
-    d.per_point.resize(out.features.size());
+  d.score = model.apply(d.features);
+  d.box_size = params.max_dim;
+  if (o.per_element) {
+    d.per_element.resize(out.features.size());
     for (std::size_t i = 0; i < out.features.size(); ++i) {
-      d.per_point[i] = o.model.apply(out.features[i]);
+      d.per_element[i] = model.apply(out.features[i]);
     }
   }
   return d;
@@ -150,26 +155,98 @@ PcqmDirection direction(const ColoredCloud& iterated, const ColoredCloud& other,
 
 }  // namespace
 
-PcqmResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& distorted,
-                        const PcqmOptions& options) {
+MetricResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& distorted,
+                          const PcqmOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   validate(options);
   validate(reference, "reference");
   validate(distorted, "distorted");
-  const auto table = Lab2000hlTable::shared(resolve_data_dir(options.data_dir));
+  const std::filesystem::path data_dir = resolve_data_dir(options.data_dir);
+  const auto table = Lab2000hlTable::shared(data_dir);
+  const LinearModel& model = options.model ? *options.model : pcqm_model();
+  const Direction dir = options.direction.value_or(kPcqmDefaultDirection);
+  const bool both = dir == Direction::kSymmetric;
 
-  ProgressSteps progress(options.progress,
-                         (options.symmetric ? 2 : 1) * detail::kProgressSteps);
-  PcqmResult result;
-  result.ref_to_dist = direction(reference, distorted, "reference", options, *table,
-                                 result.warnings, "ref→dist", progress);
-  result.score = result.ref_to_dist.score;
-  if (options.symmetric) {
-    result.dist_to_ref = direction(distorted, reference, "distorted", options, *table,
-                                   result.warnings, "dist→ref", progress);
-    result.score = 0.5 * (result.ref_to_dist.score + result.dist_to_ref->score);
+  ProgressSteps progress(options.progress, (both ? 2 : 1) * detail::kProgressSteps);
+  MetricResult result;
+  if (dir != Direction::kDistToRef) {
+    result.ref_to_dist = direction(reference, distorted, "reference", options, model, *table,
+                                   result.warnings, "ref→dist", progress);
   }
+  if (dir != Direction::kRefToDist) {
+    result.dist_to_ref = direction(distorted, reference, "distorted", options, model, *table,
+                                   result.warnings, "dist→ref", progress);
+  }
+  combine_directions(result);
   progress.finish();
+  result.metric = "pcqm";
+  result.feature_names = feature_names("F");
+  result.provenance.version = kVersion;
+  result.provenance.options = {{"direction", direction_name(dir)},
+                               {"radius", options.radius_rel},
+                               {"knn", options.knn},
+                               {"rx", options.radius_factor},
+                               {"bbox", options.bbox == BboxMode::kReference ? "reference" : "extent"},
+                               {"symmetric", both},
+                               {"weights", model.weights},
+                               {"data_dir", data_dir.string()}};
+  result.provenance.seconds = seconds_since(start);
   return result;
+}
+
+}  // namespace qm3d::pointcloud
+
+namespace qm3d::pointcloud {
+namespace detail {
+
+std::vector<OptionSpec> pcqm_option_specs() {
+  const PcqmOptions d;
+  OptionSpec radius{"radius", "Curvature radius as a fraction of the bounding box", d.radius_rel,
+                    {}, 0, 1e300};
+  radius.min_exclusive = true;
+  OptionSpec rx{"rx", "Statistics radius = rx * curvature radius", d.radius_factor, {}, 0, 1e300};
+  rx.min_exclusive = true;
+  return {radius,
+          {"knn", "Neighbours of the quadric fit used for the correspondence", d.knn, {}, 1, 10000},
+          rx,
+          {"bbox",
+           "reference: the reference tool's |min|+|max| box size (matches published PCQM values; "
+           "warns when it is >1% off the true size); extent: the true longest side",
+           "reference",
+           {"reference", "extent"}}};
+}
+
+PcqmOptions pcqm_options(const RunOptions& run, const OptionValues& values) {
+  PcqmOptions o;
+  static_cast<RunOptions&>(o) = run;
+  o.radius_rel = values.at("radius").get<double>();
+  o.knn = values.at("knn").get<int>();
+  o.radius_factor = values.at("rx").get<double>();
+  o.bbox = values.at("bbox").get<std::string>() == "extent" ? BboxMode::kExtent
+                                                           : BboxMode::kReference;
+  return o;
+}
+
+}  // namespace detail
+
+MetricSpec pcqm_spec() {
+  MetricSpec s;
+  s.name = "pcqm";
+  s.title = "PCQM";
+  s.summary = "PCQM between two coloured point clouds (PLY, PCD; OBJ/OFF/PLY meshes are read as "
+              "their vertices)";
+  s.applies_to = AppliesTo::kBoth;
+  s.reads = Input::Kind::kCloud;
+  s.default_direction = kPcqmDefaultDirection;
+  s.direction_help = "ref-to-dist: the reference's points matched on the distorted cloud (PCQM as "
+                     "defined); dist-to-ref: roles swapped; symmetric: mean of both";
+  s.takes_model = true;
+  s.options = detail::pcqm_option_specs();
+  s.run = [](const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
+             const OptionValues& values) {
+    return compute_pcqm(ref.cloud(), dist.cloud(), detail::pcqm_options(run, values));
+  };
+  return s;
 }
 
 }  // namespace qm3d::pointcloud

@@ -91,7 +91,15 @@ TEST_F(Cli, PcqmJsonMatchesTheReference) {
   EXPECT_NEAR(j["score"].get<double>(), 0.012322561648393961, 1e-6 * 0.0123);
   EXPECT_NEAR(j["features"]["F5"].get<double>(), 0.67531045235576315, 1e-6);
   EXPECT_TRUE(j.contains("bbox_max_side"));
-  EXPECT_FALSE(j.contains("directions"));
+  // One direction: at the top level (as before) and under "directions" (like every metric),
+  // with box_size, bbox_max_side's name for what it is, beside it.
+  const auto& r2d = j["directions"]["ref_to_dist"];
+  EXPECT_EQ(r2d["score"], j["score"]);
+  EXPECT_EQ(r2d["features"], j["features"]);
+  EXPECT_EQ(r2d["box_size"], j["bbox_max_side"]);
+  EXPECT_EQ(j["box_size"], j["bbox_max_side"]);
+  EXPECT_FALSE(j["directions"].contains("dist_to_ref"));
+  EXPECT_EQ(j["options"]["direction"], "ref-to-dist");
 }
 
 // A voxelised pair at the default radius: underdetermined curvature fits are reported in the
@@ -164,7 +172,7 @@ TEST_F(Cli, MapIsWrittenAndHoldsTheLibrarysPerVertexValues) {
   for (std::size_t i = 0; i < c.positions.size(); i += 97) {
     float v;
     std::memcpy(&v, bytes.data() + body + i * stride + 27, 4);
-    EXPECT_EQ(v, static_cast<float>(lib.dist_to_ref->local_distortion[i])) << i;
+    EXPECT_EQ(v, static_cast<float>(lib.dist_to_ref->per_element[i])) << i;
   }
 }
 

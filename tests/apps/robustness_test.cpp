@@ -84,7 +84,7 @@ TEST_F(Unusual, EmptyAndTinyFiles) {
 TEST_F(Unusual, WrongMagicAndUnknownExtension) {
   expect_rejected("pcqm", file("magic.ply", "plx\nformat ascii 1.0\nend_header\n"), "not a PLY file");
   expect_rejected("cmdm", file("magic.off", "MESH\n3 1 0\n"), "not an OFF file");
-  expect_rejected("cmdm", file("mesh.stl", "solid x\n"), "unknown mesh format '.stl'");
+  expect_rejected("cmdm", file("mesh.stl", "solid x\n"), "unknown format '.stl'");
   expect_rejected("pcqm", file("cloud.xyz", "0 0 0\n"), "xyz");
 }
 

@@ -49,8 +49,8 @@ std::vector<ReferenceRow> reference_rows(const std::filesystem::path& table) {
 }
 
 // Each reference pair is computed once and shared by the tests.
-const MeshMetricResult& result_for(const std::string& ref, const std::string& dist) {
-  static std::map<std::string, MeshMetricResult> cache;
+const MetricResult& result_for(const std::string& ref, const std::string& dist) {
+  static std::map<std::string, MetricResult> cache;
   const std::string key = ref + "|" + dist;
   auto it = cache.find(key);
   if (it == cache.end()) {
@@ -72,7 +72,7 @@ void expect_score(double actual, double expected, const char* what) {
 void expect_direction(const DirectionResult& d, double score, double bb,
                       const FeatureVector& f) {
   expect_score(d.score, score, "score");
-  EXPECT_NEAR(d.bbox_max_side, bb, 1e-9);
+  EXPECT_NEAR(d.box_size, bb, 1e-9);
   for (std::size_t k = 0; k < kNumFeatures; ++k) EXPECT_NEAR(d.features[k], f[k], 1e-6) << "f" << k + 1;
 }
 
@@ -81,7 +81,7 @@ void expect_rows(const std::filesystem::path& table, std::size_t count) {
   ASSERT_EQ(rows.size(), count);
   for (const auto& row : rows) {
     SCOPED_TRACE(row.ref + " vs " + row.dist);
-    const MeshMetricResult& r = result_for(row.ref, row.dist);
+    const MetricResult& r = result_for(row.ref, row.dist);
     expect_score(r.score, row.sym, "symmetric");
     ASSERT_TRUE(r.dist_to_ref && r.ref_to_dist);
     expect_direction(*r.dist_to_ref, row.d2r, row.bb_d2r, row.f_d2r);
@@ -100,17 +100,17 @@ TEST(Cmdm, MatchesEveryQuantisedReferenceRow) {
 // LD per vertex in both directions against `stem`_LD_dist.txt / _LD_ref.txt in `dir`/per_vertex.
 void expect_per_vertex(const std::string& ref, const std::string& dist,
                        const std::filesystem::path& dir, const std::string& stem) {
-  const MeshMetricResult& r = result_for(ref, dist);
+  const MetricResult& r = result_for(ref, dist);
   const auto ld_dist = test::read_column(dir / "per_vertex" / (stem + "_LD_dist.txt"));
   const auto ld_ref = test::read_column(dir / "per_vertex" / (stem + "_LD_ref.txt"));
-  ASSERT_EQ(r.dist_to_ref->local_distortion.size(), ld_dist.size());
-  ASSERT_EQ(r.ref_to_dist->local_distortion.size(), ld_ref.size());
+  ASSERT_EQ(r.dist_to_ref->per_element.size(), ld_dist.size());
+  ASSERT_EQ(r.ref_to_dist->per_element.size(), ld_ref.size());
   double worst = 0;
   for (std::size_t i = 0; i < ld_dist.size(); ++i) {
-    worst = std::max(worst, std::fabs(r.dist_to_ref->local_distortion[i] - ld_dist[i]));
+    worst = std::max(worst, std::fabs(r.dist_to_ref->per_element[i] - ld_dist[i]));
   }
   for (std::size_t i = 0; i < ld_ref.size(); ++i) {
-    worst = std::max(worst, std::fabs(r.ref_to_dist->local_distortion[i] - ld_ref[i]));
+    worst = std::max(worst, std::fabs(r.ref_to_dist->per_element[i] - ld_ref[i]));
   }
   EXPECT_LT(worst, 1e-6);
 }
@@ -144,13 +144,13 @@ TEST(Cmdm, OneAndTwoThreadsAreBitIdentical) {
   const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
   const int saved = omp_get_max_threads();
   omp_set_num_threads(1);
-  const MeshMetricResult one = compute_cmdm(r, d);
+  const MetricResult one = compute_cmdm(r, d);
   omp_set_num_threads(2);
-  const MeshMetricResult two = compute_cmdm(r, d);
+  const MetricResult two = compute_cmdm(r, d);
   omp_set_num_threads(saved);
   EXPECT_EQ(one.score, two.score);
   EXPECT_EQ(one.dist_to_ref->features, two.dist_to_ref->features);
-  EXPECT_EQ(one.ref_to_dist->local_distortion, two.ref_to_dist->local_distortion);
+  EXPECT_EQ(one.ref_to_dist->per_element, two.ref_to_dist->per_element);
 }
 
 // The threads option reaches every parallel part, the concurrent preparation and matching
@@ -160,13 +160,13 @@ TEST(Cmdm, ThreadsOptionGivesBitIdenticalResults) {
   const auto d = read_mesh(cmdm_dir() / "blob4_bothnoise.off").mesh;
   CmdmOptions o;
   o.threads = 1;
-  const MeshMetricResult one = compute_cmdm(r, d, o);
+  const MetricResult one = compute_cmdm(r, d, o);
   for (int threads : {2, 3}) {
     o.threads = threads;
-    const MeshMetricResult many = compute_cmdm(r, d, o);
+    const MetricResult many = compute_cmdm(r, d, o);
     EXPECT_EQ(one.score, many.score) << threads;
     EXPECT_EQ(one.ref_to_dist->features, many.ref_to_dist->features) << threads;
-    EXPECT_EQ(one.dist_to_ref->local_distortion, many.dist_to_ref->local_distortion) << threads;
+    EXPECT_EQ(one.dist_to_ref->per_element, many.dist_to_ref->per_element) << threads;
   }
 }
 
@@ -175,7 +175,7 @@ TEST(Cmdm, DirectionOptionComputesOnlyWhatIsAsked) {
   const auto d = read_mesh(cmdm_dir() / "monkey_simplified.obj").mesh;
   CmdmOptions o;
   o.direction = Direction::kDistToRef;
-  const MeshMetricResult one = compute_cmdm(r, d, o);
+  const MetricResult one = compute_cmdm(r, d, o);
   EXPECT_TRUE(one.dist_to_ref);
   EXPECT_FALSE(one.ref_to_dist);
   EXPECT_EQ(one.score, result_for("monkey2.obj", "monkey_simplified.obj").dist_to_ref->score);
@@ -205,7 +205,7 @@ TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
   const test::ProgressCalls& calls = recorder.calls;
   CmdmOptions o;
   o.progress = recorder.callback();
-  const MeshMetricResult with = compute_cmdm(r, d, o);
+  const MetricResult with = compute_cmdm(r, d, o);
   expect_sound_progress(calls, "ref→dist: scale 3/3");
   EXPECT_EQ(calls.size(), 2u + 2 * 3 + 1);  // connectivity, matching, 2 x 3 scales, done
   EXPECT_EQ(with.score, compute_cmdm(r, d).score);
@@ -228,9 +228,10 @@ TEST(Cmdm, WeightsAndScalesAreOptions) {
   const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
   const auto d = read_mesh(cmdm_dir() / "blob4_colnoise.off").mesh;
   CmdmOptions o;
-  o.model.weights = {0, 0, 0, 0, 0, 0, 1, 0};  // chroma only
+  o.model = cmdm_model();
+  o.model->weights = {0, 0, 0, 0, 0, 0, 1, 0};  // chroma only
   o.direction = Direction::kDistToRef;
-  const MeshMetricResult chroma_only = compute_cmdm(r, d, o);
+  const MetricResult chroma_only = compute_cmdm(r, d, o);
   EXPECT_DOUBLE_EQ(chroma_only.score, chroma_only.dist_to_ref->features[6]);
   o.scales = 1;
   EXPECT_NE(compute_cmdm(r, d, o).score, chroma_only.score);

@@ -47,7 +47,7 @@ TEST(Msdm2, MatchesEveryReferenceRow) {
   const int rows = for_each_row(
       test::reference_dir() / "msdm2" / "msdm2_reference.tsv",
       [](const std::string& ref, const std::string& dist, double expected) {
-        const MeshMetricResult m =
+        const MetricResult m =
             compute_msdm2(read_mesh(cmdm_dir() / ref).mesh, read_mesh(cmdm_dir() / dist).mesh);
         // The reference printed 6 significant digits. On blob4_geonoise / bothnoise ~13% of the
         // distorted vertices project onto an edge of the reference, equidistant from two faces,
@@ -68,7 +68,7 @@ TEST(Msdm2, MatchesEveryQuantisedReferenceRow) {
   const int rows = for_each_row(
       quantised_dir() / "msdm2_quantised_reference.tsv",
       [](const std::string& ref, const std::string& dist, double expected) {
-        const MeshMetricResult m =
+        const MetricResult m =
             compute_msdm2(quantised_table_mesh(ref), quantised_table_mesh(dist));
         EXPECT_NEAR(m.score, expected, 1e-6 * expected);
       });
@@ -83,11 +83,11 @@ TEST(Msdm2, MatchesEveryQuantisedReferenceRow) {
 void expect_local_msdm2(int bits) {
   const std::string dist = "blob5_pquant" + std::to_string(bits);
   SCOPED_TRACE(dist);
-  const MeshMetricResult m =
+  const MetricResult m =
       compute_msdm2(quantised_table_mesh("blob5_ref.off"), quantised_table_mesh(dist + ".off"));
   const auto expected =
       test::read_column(quantised_dir() / "per_vertex" / ("MSDM2_local_" + dist + "_vs_blob5_ref.txt"));
-  const std::vector<double>& local = m.dist_to_ref->local_distortion;
+  const std::vector<double>& local = m.dist_to_ref->per_element;
   ASSERT_EQ(local.size(), expected.size());
   double worst = 0;
   for (std::size_t i = 0; i < local.size(); ++i) {
@@ -106,18 +106,18 @@ TEST(Msdm2, ThreadsOptionGivesBitIdenticalResults) {
   Msdm2Options o;
   o.direction = Direction::kSymmetric;
   o.threads = 1;
-  const MeshMetricResult one = compute_msdm2(r, d, o);
+  const MetricResult one = compute_msdm2(r, d, o);
   o.threads = 2;
-  const MeshMetricResult two = compute_msdm2(r, d, o);
+  const MetricResult two = compute_msdm2(r, d, o);
   EXPECT_EQ(one.score, two.score);
-  EXPECT_EQ(one.ref_to_dist->local_distortion, two.ref_to_dist->local_distortion);
+  EXPECT_EQ(one.ref_to_dist->per_element, two.ref_to_dist->per_element);
 }
 
 TEST(Msdm2, IdenticalMeshesGiveZero) {
   const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
   Msdm2Options o;
   o.direction = Direction::kSymmetric;
-  const MeshMetricResult m = compute_msdm2(r, r, o);
+  const MetricResult m = compute_msdm2(r, r, o);
   EXPECT_LT(m.score, 1e-12);
   EXPECT_TRUE(m.dist_to_ref && m.ref_to_dist);
 }
@@ -140,11 +140,11 @@ TEST_F(Msdm2Blob4, IgnoresColourAndWorksWithoutIt) {
 }
 
 TEST_F(Msdm2Blob4, LocalDistortionPoolsToTheScore) {
-  const MeshMetricResult m = compute_msdm2(ref_, geonoise_);
+  const MetricResult m = compute_msdm2(ref_, geonoise_);
   double sum = 0;
-  for (double ld : m.dist_to_ref->local_distortion) sum += ld * ld * ld;
-  EXPECT_NEAR(std::cbrt(sum / m.dist_to_ref->local_distortion.size()), m.score, 1e-12);
-  EXPECT_EQ(m.dist_to_ref->local_distortion.size(), geonoise_.num_vertices());
+  for (double ld : m.dist_to_ref->per_element) sum += ld * ld * ld;
+  EXPECT_NEAR(std::cbrt(sum / m.dist_to_ref->per_element.size()), m.score, 1e-12);
+  EXPECT_EQ(m.dist_to_ref->per_element.size(), geonoise_.num_vertices());
 }
 
 TEST_F(Msdm2Blob4, ReportsEachScaleOfItsDirection) {

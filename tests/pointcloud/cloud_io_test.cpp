@@ -63,7 +63,7 @@ void expect_same_cloud(const ColoredCloud& a, const ColoredCloud& b) {
 double score(const ColoredCloud& ref, const ColoredCloud& dist) {
   PcqmOptions o;
   o.data_dir = test::tables_dir();
-  o.per_point = false;
+  o.per_element = false;
   return compute_pcqm(ref, dist, o).score;
 }
 

@@ -106,8 +106,8 @@ const ColoredCloud& cloud(const std::filesystem::path& dir, const std::string& f
 
 const ColoredCloud& cloud(const std::string& file_name) { return cloud(pcqm_dir(), file_name); }
 
-const PcqmResult& reference_result(const ReferenceRow& row) {
-  static std::map<std::string, PcqmResult> cache;
+const MetricResult& reference_result(const ReferenceRow& row) {
+  static std::map<std::string, MetricResult> cache;
   auto it = cache.find(row.name);
   if (it == cache.end()) {
     it = cache

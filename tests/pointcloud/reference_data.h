@@ -47,7 +47,7 @@ const ColoredCloud& cloud(const std::string& file_name);
 const ColoredCloud& cloud(const std::filesystem::path& dir, const std::string& file_name);
 
 /// compute_pcqm of a row with its options, computed once per run.
-const PcqmResult& reference_result(const ReferenceRow& row);
+const MetricResult& reference_result(const ReferenceRow& row);
 
 /// The first n points of a cloud.
 ColoredCloud head(const ColoredCloud& c, std::size_t n);

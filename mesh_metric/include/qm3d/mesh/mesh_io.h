@@ -52,4 +52,10 @@ MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::stri
 /// Used to read a mesh as a point cloud.
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path);
 
+/// read_mesh and read_mesh_vertices with the format given (e.g. recognised by content,
+/// qm3d/common/metric.h) instead of taken from the extension.
+MeshFile read_mesh(const std::filesystem::path& path, MeshFormat format,
+                   const MeshReadOptions& options = {});
+ColoredCloud read_mesh_vertices(const std::filesystem::path& path, MeshFormat format);
+
 }  // namespace qm3d::mesh

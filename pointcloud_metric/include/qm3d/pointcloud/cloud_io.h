@@ -30,4 +30,8 @@ namespace qm3d::pointcloud {
 ///      compute_pcqm rejects them.
 ColoredCloud read_cloud(const std::filesystem::path& path);
 
+enum class CloudFormat { kPly, kPcd };
+/// read_cloud with the format given (e.g. recognised by content) instead of the extension.
+ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format);
+
 }  // namespace qm3d::pointcloud

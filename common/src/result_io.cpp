@@ -1,28 +1,34 @@
-#include "report.h"
+#include "qm3d/common/result_io.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "qm3d/common/version.h"
 
-namespace qm3d::app {
+namespace qm3d {
 namespace {
 
 constexpr const char* kDirectionColumns[] = {"dist_to_ref", "ref_to_dist"};
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
-nlohmann::json features_json(const FeatureVector& f, const char* prefix) {
+nlohmann::json features_json(const MetricResult& r, const FeatureVector& f) {
   nlohmann::json j = nlohmann::json::object();
-  for (std::size_t k = 0; k < kNumFeatures; ++k) j[prefix + std::to_string(k + 1)] = number(f[k]);
+  for (std::size_t k = 0; k < kNumFeatures; ++k) {
+    j[k < r.feature_names.size() ? r.feature_names[k] : "f" + std::to_string(k + 1)] = number(f[k]);
+  }
   return j;
 }
 
-nlohmann::json direction_json(const DirectionReport& d, const char* prefix) {
-  return {{"score", number(d.score)},
-          {"features", features_json(d.features, prefix)},
-          {"bbox_max_side", number(d.bbox_max_side)}};
+// `bbox_max_side` is the name of `box_size` before it was named for what it is; kept so that
+// existing readers of the JSON keep working.
+void add_direction(nlohmann::json& j, const MetricResult& r, const DirectionResult& d) {
+  j["features"] = features_json(r, d.features);
+  j["box_size"] = number(d.box_size);
+  j["bbox_max_side"] = number(d.box_size);
 }
 
 std::string upper(std::string s) {
@@ -37,17 +43,14 @@ std::string short_number(double v) {
   return o.str();
 }
 
-void append_direction(std::ostringstream& row, const std::optional<DirectionReport>& d) {
+void append_direction(std::ostringstream& row, const std::optional<DirectionResult>& d) {
   if (!d) {
     row << std::string(2 + kNumFeatures, ',');
     return;
   }
-  row << ',' << format_double(d->score) << ',' << format_double(d->bbox_max_side);
+  row << ',' << format_double(d->score) << ',' << format_double(d->box_size);
   for (double f : d->features) row << ',' << format_double(f);
 }
-
-// PCQM on clouds, whether read ("pcqm") or sampled from meshes ("pcqm_sampled").
-bool is_pcqm(const std::string& metric) { return metric.rfind("pcqm", 0) == 0; }
 
 }  // namespace
 
@@ -58,7 +61,7 @@ std::string format_double(double v) {
   return std::string(buf, res.ptr);
 }
 
-std::string text_line(const MetricReport& r) {
+std::string text_line(const MetricResult& r) {
   std::ostringstream o;
   o << upper(r.metric) << " = " << short_number(r.score);
   if (r.dist_to_ref && r.ref_to_dist) {
@@ -66,30 +69,47 @@ std::string text_line(const MetricReport& r) {
       << short_number(r.ref_to_dist->score) << ")";
   } else if (r.dist_to_ref) {
     o << "  (dist\u2192ref)";
-  } else if (r.ref_to_dist && !is_pcqm(r.metric)) {
+  } else if (r.ref_to_dist) {
     o << "  (ref\u2192dist)";
   }
   return o.str();
 }
 
-nlohmann::json to_json(const MetricReport& r) {
-  // CMDM reports f1..f8 (the paper's names); PCQM F1..F8 (its paper's).
-  const char* prefix = is_pcqm(r.metric) ? "F" : "f";
-  nlohmann::json j = {{"metric", r.metric},          {"version", kVersion},
-                      {"reference", r.reference},    {"distorted", r.distorted},
-                      {"options", r.options},        {"score", number(r.score)},
-                      {"seconds", number(r.seconds)}};
+nlohmann::json to_json(const MetricResult& r) {
+  const Provenance& p = r.provenance;
+  nlohmann::json j = {{"metric", r.metric},
+                      {"version", p.version.empty() ? std::string(kVersion) : p.version},
+                      {"reference", p.reference},
+                      {"distorted", p.distorted},
+                      {"options", p.options},
+                      {"score", number(r.score)},
+                      {"seconds", number(p.seconds)}};
   nlohmann::json directions = nlohmann::json::object();
-  if (r.dist_to_ref) directions["dist_to_ref"] = direction_json(*r.dist_to_ref, prefix);
-  if (r.ref_to_dist) directions["ref_to_dist"] = direction_json(*r.ref_to_dist, prefix);
-  const bool both = r.dist_to_ref && r.ref_to_dist;
-  if (!is_pcqm(r.metric) || both) j["directions"] = directions;
-  if (is_pcqm(r.metric) && r.ref_to_dist) {
-    // PCQM's own result is the reference -> distorted direction.
-    j["features"] = features_json(r.ref_to_dist->features, prefix);
-    j["bbox_max_side"] = number(r.ref_to_dist->bbox_max_side);
+  if (r.dist_to_ref) {
+    directions["dist_to_ref"] = {{"score", number(r.dist_to_ref->score)}};
+    add_direction(directions["dist_to_ref"], r, *r.dist_to_ref);
+  }
+  if (r.ref_to_dist) {
+    directions["ref_to_dist"] = {{"score", number(r.ref_to_dist->score)}};
+    add_direction(directions["ref_to_dist"], r, *r.ref_to_dist);
+  }
+  j["directions"] = directions;
+  // One direction: its features at the top level too (PCQM's own output is its one direction).
+  if (static_cast<bool>(r.dist_to_ref) != static_cast<bool>(r.ref_to_dist)) {
+    add_direction(j, r, r.any_direction());
   }
   j["warnings"] = r.warnings;
+  return j;
+}
+
+nlohmann::json compare_json(const std::vector<MetricResult>& results) {
+  nlohmann::json j = {{"metric", "compare"}, {"version", kVersion}};
+  if (!results.empty()) {
+    j["reference"] = results.front().provenance.reference;
+    j["distorted"] = results.front().provenance.distorted;
+  }
+  j["metrics"] = nlohmann::json::object();
+  for (const auto& r : results) j["metrics"][r.metric] = to_json(r);
   return j;
 }
 
@@ -103,11 +123,12 @@ std::string csv_header() {
   return h.str();
 }
 
-std::string csv_row(const MetricReport& r, const std::string& error) {
+std::string csv_row(const MetricResult& r, const std::string& error) {
   std::ostringstream row;
-  row << csv_field(r.reference) << ',' << csv_field(r.distorted) << ',' << csv_field(r.metric) << ','
-      << format_double(r.score) << ',' << (error.empty() ? "ok" : "error") << ','
-      << csv_field(error) << ',' << format_double(r.seconds);
+  row << csv_field(r.provenance.reference) << ',' << csv_field(r.provenance.distorted) << ','
+      << csv_field(r.metric) << ',' << format_double(r.score) << ','
+      << (error.empty() ? "ok" : "error") << ',' << csv_field(error) << ','
+      << format_double(r.provenance.seconds);
   append_direction(row, r.dist_to_ref);
   append_direction(row, r.ref_to_dist);
   return row.str();
@@ -158,4 +179,4 @@ std::vector<std::string> csv_split(const std::string& line) {
   return fields;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d

@@ -1,0 +1,208 @@
+// One way to run any metric: inputs recognised by content, a registry of metrics with their own
+// options, and run_metric().
+//
+// The metric modules register what they bring (qm3d/mesh/metrics.h, qm3d/pointcloud/metrics.h):
+// their metrics, and the readers and the surface sampler an Input uses. A program builds one
+// Registry, registers the modules it links, and runs metrics by name:
+//
+//   qm3d::Registry registry;
+//   qm3d::mesh::register_metrics(registry);
+//   qm3d::pointcloud::register_metrics(registry);
+//   const qm3d::Input ref = registry.read("ref.ply"), dist = registry.read("dist.ply");
+//   const qm3d::MetricSpec& spec = registry.auto_metric(ref, dist);   // CMDM for meshes, ...
+//   qm3d::RunOptions run;  run.threads = 2;
+//   qm3d::MetricResult r = qm3d::run_metric(spec, ref, dist, run, {{"scales", 3}});
+//
+// Adding a metric: one file in its module with its compute function and a MetricSpec, and one
+// line in the module's register_metrics(). The tool (commands, options, --help, batch, compare)
+// learns it from the registry.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/result.h"
+#include "qm3d/common/types.h"
+
+namespace qm3d {
+
+/// File formats recognised by content (their first bytes), whatever the extension.
+enum class FileFormat { kPly, kObj, kOff, kPcd };
+
+/// The format of a file's content: "ply" magic, an OFF keyword (OFF, COFF, NOFF, ...), a PCD
+/// header line, else OBJ when the text has vertex lines. Content that is none of them falls back
+/// to the extension (.ply, .obj, .off, .pcd: that reader then says what is wrong); FormatError
+/// naming the file otherwise.
+FileFormat detect_format(const std::filesystem::path& path);
+/// The same on content already read (`name` for messages).
+FileFormat detect_format(const std::string& bytes, const std::string& name);
+
+/// A mesh as read from a file: vertices (with their colours, when the file has them), triangles
+/// (polygons fan-triangulated, unused vertices dropped) and the reader's repairs.
+struct MeshData {
+  ColoredMesh mesh;
+  bool has_colors = true;
+  std::vector<std::string> warnings;
+};
+
+class Registry;
+
+/// One object to score: a file (read on first use, then kept) or data already in memory.
+/// Meshes are recognised by content: a PLY with faces, an OBJ with faces, any OFF; clouds are
+/// PLY without faces and PCD. Any mesh can be used as a cloud (its vertices). Thread-safe.
+class Input {
+ public:
+  enum class Kind { kMesh, kCloud };
+
+  /// A file; its kind is recognised now (from its header), its content read when first used.
+  static Input from_file(const std::filesystem::path& path, const Registry& registry);
+  /// A mesh in memory (`name` appears in results and messages).
+  static Input from_mesh(ColoredMesh mesh, std::string name, bool has_colors = true);
+  /// A cloud in memory.
+  static Input from_cloud(ColoredCloud cloud, std::string name);
+
+  const std::string& name() const;
+  /// The file, or empty for data in memory.
+  const std::filesystem::path& path() const;
+  Kind kind() const;
+  bool is_mesh() const { return kind() == Kind::kMesh; }
+  FileFormat format() const;  ///< the file's format (kPly for data in memory)
+
+  /// The mesh. FormatError naming the input when it is a cloud.
+  const MeshData& mesh() const;
+  /// The cloud: a cloud's points, or a mesh's vertices (every vertex of the file, colours
+  /// required).
+  const ColoredCloud& cloud() const;
+  /// Reads now what `kind` needs (so that two inputs can be read concurrently).
+  void load(Kind as) const;
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+};
+
+/// What the modules register to read inputs.
+struct Readers {
+  /// A mesh file (OBJ, OFF, PLY) of the given format; colours kept when present.
+  std::function<MeshData(const std::filesystem::path&, FileFormat)> mesh;
+  /// Every vertex of a mesh file (OBJ, OFF) as a cloud.
+  std::function<ColoredCloud(const std::filesystem::path&, FileFormat)> mesh_vertices;
+  /// A cloud file (PLY, PCD); a PLY mesh gives its vertices.
+  std::function<ColoredCloud(const std::filesystem::path&, FileFormat)> cloud;
+};
+
+/// How a surface is sampled into a cloud (mesh/sampling.h): `points` samples, or `density` per
+/// unit area when points is 0; one seed gives the same cloud everywhere.
+struct SurfaceSampling {
+  std::size_t points = 0;
+  double density = 0;
+  std::uint64_t seed = 1;
+};
+/// Samples an input's surface (textured OBJ files from their texture).
+using SurfaceSampler = std::function<ColoredCloud(const Input&, const SurfaceSampling&)>;
+
+/// One option of a metric: its name (as the tool's --name and the bindings' keyword), help text
+/// and default. The default's JSON type is the option's type: integer, number, boolean (a
+/// flag), string (one of `choices` when not empty) or an array of numbers (its length fixed).
+struct OptionSpec {
+  std::string name;
+  std::string help;
+  nlohmann::json default_value;
+  std::vector<std::string> choices;
+  double min = -1e300;       ///< inclusive bounds of a number
+  double max = 1e300;
+  bool min_exclusive = false;  ///< min itself is not allowed (e.g. a radius > 0)
+};
+
+/// Which inputs a metric scores.
+enum class AppliesTo { kMeshes, kClouds, kBoth };
+
+/// The option values of one metric run: a JSON object {name: value}; missing names take their
+/// defaults.
+using OptionValues = nlohmann::json;
+
+struct MetricSpec;
+/// Computes the metric on two inputs. `options` holds every option of the spec (defaults filled
+/// and checked by run_metric).
+using MetricRunner = std::function<MetricResult(const MetricSpec&, const Input& reference,
+                                                const Input& distorted, const RunOptions&,
+                                                const OptionValues& options)>;
+
+struct MetricSpec {
+  std::string name;     ///< "cmdm": the command, the batch list's metric, the result's metric
+  std::string title;    ///< "CMDM": how the tool prints it
+  std::string summary;  ///< one line for --help
+  AppliesTo applies_to = AppliesTo::kBoth;
+  /// How the metric reads its inputs: as meshes (faces used) or as clouds (any mesh's vertices).
+  Input::Kind reads = Input::Kind::kCloud;
+  Direction default_direction = Direction::kSymmetric;
+  std::string direction_help;  ///< what the directions mean for this metric
+  bool takes_model = false;    ///< a linear model of f1..f8 (--weights / --model) applies
+  /// The metric a model file must name to apply here (empty = `name`; pcqm_sampled takes PCQM
+  /// models).
+  std::string model_metric;
+  /// The per-element values are on the input's elements (vertices or points), so that they can
+  /// be written on its geometry; false when they are on something else (samples).
+  bool per_element_on_input = true;
+
+  const std::string& model_name() const { return model_metric.empty() ? name : model_metric; }
+  std::vector<OptionSpec> options;
+  MetricRunner run;
+
+  /// True when the metric scores this pair of inputs.
+  bool applies(const Input& reference, const Input& distorted) const;
+  /// The option values with every default filled in; std::invalid_argument naming the option
+  /// for an unknown name, a wrong type, a value out of range or not among the choices.
+  OptionValues complete(const OptionValues& given) const;
+};
+
+/// The metrics and readers a program knows.
+class Registry {
+ public:
+  /// Adds a metric; std::logic_error when the name is taken.
+  void add(MetricSpec spec);
+  /// The metric of that name, or nullptr.
+  const MetricSpec* find(const std::string& name) const;
+  /// The metric of that name; FormatError listing the known names otherwise.
+  const MetricSpec& get(const std::string& name) const;
+  /// Every metric, in registration order.
+  const std::vector<MetricSpec>& metrics() const { return metrics_; }
+  /// The metrics that apply to the pair, in registration order (what `compare` runs).
+  std::vector<const MetricSpec*> applicable(const Input& reference, const Input& distorted) const;
+  /// The first metric that applies (registration order: CMDM for two meshes, PCQM otherwise).
+  const MetricSpec& auto_metric(const Input& reference, const Input& distorted) const;
+
+  Readers& readers() { return readers_; }
+  const Readers& readers() const { return readers_; }
+  void set_sampler(SurfaceSampler sampler) { sampler_ = std::move(sampler); }
+  bool has_sampler() const { return static_cast<bool>(sampler_); }
+  /// The surface sampler; std::logic_error when no module registered one.
+  const SurfaceSampler& sampler() const;
+
+  /// Input::from_file(path, *this).
+  Input read(const std::filesystem::path& path) const { return Input::from_file(path, *this); }
+
+ private:
+  std::vector<MetricSpec> metrics_;
+  Readers readers_;
+  SurfaceSampler sampler_;
+};
+
+/// Runs a metric: checks and completes the options, reads both inputs (concurrently unless
+/// run.threads == 1), computes, and fills the result's provenance (input names; seconds include
+/// the reading). Errors of the computation name both inputs.
+MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
+                        const RunOptions& run, const OptionValues& options = {});
+
+/// The option values of `spec` taken from a larger set (e.g. the options of every metric the
+/// tool accepts): the names the metric knows, others ignored.
+OptionValues options_for(const MetricSpec& spec, const OptionValues& all);
+
+}  // namespace qm3d

@@ -1,0 +1,46 @@
+// Writing MetricResult: the human line, the JSON object and the CSV row the qm3d tool prints, and
+// the CSV helpers batch and merge use. One writer serves every metric.
+//
+// JSON (one metric): {metric, version, reference, distorted, options, score, seconds,
+//   directions: {dist_to_ref|ref_to_dist: {score, features: {f1..f8 | F1..F8}, box_size,
+//   bbox_max_side}}, [features, box_size, bbox_max_side: the single direction's, when one was
+//   computed], warnings}. NaN is written as null; doubles round-trip exactly.
+// CSV: csv_header() columns, one row per result (bbox_max_side columns hold box_size).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/result.h"
+
+namespace qm3d {
+
+/// `CMDM = 0.0421026  (dist→ref 0.0303955, ref→dist 0.0538098)`; a single direction is named
+/// in parentheses.
+std::string text_line(const MetricResult& r);
+
+/// The JSON object of one result.
+nlohmann::json to_json(const MetricResult& r);
+
+/// The JSON object of several metrics on one pair (`qm3d compare --json`): {metric: "compare",
+/// version, reference, distorted, metrics: {name: to_json(result)}}.
+nlohmann::json compare_json(const std::vector<MetricResult>& results);
+
+/// Fixed CSV header shared by every metric and the batch mode.
+std::string csv_header();
+/// One CSV row (no newline). `error` non-empty marks a failed pair.
+std::string csv_row(const MetricResult& r, const std::string& error = {});
+/// A CSV row for a pair that failed before producing any result.
+std::string csv_error_row(const std::string& reference, const std::string& distorted,
+                          const std::string& metric, const std::string& error);
+
+/// Quotes a CSV field when needed (RFC 4180; line breaks become spaces).
+std::string csv_field(const std::string& s);
+/// Splits one CSV line into fields (RFC 4180 quoting).
+std::vector<std::string> csv_split(const std::string& line);
+
+/// Shortest text that reads back as the same double ("nan" for NaN).
+std::string format_double(double v);
+
+}  // namespace qm3d

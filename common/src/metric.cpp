@@ -1,0 +1,397 @@
+#include "qm3d/common/metric.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <future>
+#include <sstream>
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+#include "qm3d/common/ply.h"
+#include "qm3d/common/version.h"
+
+namespace qm3d {
+namespace {
+
+constexpr std::size_t kSniffBytes = 1 << 20;  // enough for any PLY / PCD header
+
+std::string head_of(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path.string() + ": no such file");
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path.string() + ": is a directory, not a file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": cannot be opened for reading");
+  std::string bytes(kSniffBytes, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  if (in.bad()) throw InputError(path.string() + ": read failed");
+  return bytes;
+}
+
+// The first word of the first line that is not blank or a comment.
+std::string first_word(const std::string& bytes, char comment) {
+  std::istringstream in(bytes);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == comment) continue;
+    std::istringstream words(line.substr(start));
+    std::string w;
+    words >> w;
+    return w;
+  }
+  return {};
+}
+
+bool is_off_keyword(const std::string& w) {
+  // [ST][C][N][4][n]OFF (the Princeton OFF variants).
+  if (w.size() < 3 || w.compare(w.size() - 3, 3, "OFF") != 0) return false;
+  return std::all_of(w.begin(), w.end() - 3,
+                     [](char c) { return std::strchr("STCN4n", c) != nullptr; });
+}
+
+bool has_line_starting(const std::string& text, const char* keyword) {
+  const std::size_t n = std::strlen(keyword);
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    const auto start = text.find_first_not_of(" \t", pos);
+    if (start != std::string::npos && text.compare(start, n, keyword) == 0) return true;
+    const auto next = text.find('\n', pos);
+    if (next == std::string::npos) break;
+    pos = next + 1;
+  }
+  return false;
+}
+
+bool off_has_faces(const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  bool keyword = false;
+  while (std::getline(in, line)) {
+    const auto start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos || line[start] == '#') continue;
+    std::istringstream words(line.substr(start));
+    if (!keyword) {
+      std::string w;
+      words >> w;
+      keyword = true;
+      long long v = 0, f = 0;
+      if (words >> v >> f) return f > 0;  // counts on the keyword's line
+      continue;
+    }
+    long long v = 0, f = 0;
+    if (words >> v >> f) return f > 0;
+    return true;  // malformed counts: let the mesh reader say what is wrong
+  }
+  return true;
+}
+
+}  // namespace
+
+FileFormat detect_format(const std::string& bytes, const std::string& name) {
+  if (bytes.compare(0, 3, "ply") == 0 && bytes.size() > 3 &&
+      (bytes[3] == '\n' || bytes[3] == '\r')) {
+    return FileFormat::kPly;
+  }
+  const std::string pcd_first = first_word(bytes, '#');
+  if (bytes.compare(0, 6, "# .PCD") == 0 || pcd_first == "VERSION" || pcd_first == "FIELDS") {
+    return FileFormat::kPcd;
+  }
+  if (is_off_keyword(first_word(bytes, '#'))) return FileFormat::kOff;
+  if (bytes.find('\0') == std::string::npos && has_line_starting(bytes, "v ")) {
+    return FileFormat::kObj;
+  }
+  throw FormatError(name + ": not a PLY, OBJ, OFF or PCD file (unrecognised content)");
+}
+
+namespace {
+
+// The format a file's content shows, else the one its extension names (so that a damaged file
+// gets its format's precise error), else FormatError.
+FileFormat format_of_file(const std::string& head, const std::filesystem::path& path) {
+  try {
+    return detect_format(head, path.string());
+  } catch (const FormatError&) {
+    const std::string ext = lower_extension(path);
+    if (ext == "ply") return FileFormat::kPly;
+    if (ext == "obj") return FileFormat::kObj;
+    if (ext == "off") return FileFormat::kOff;
+    if (ext == "pcd") return FileFormat::kPcd;
+    throw FormatError(path.string() + ": unknown format '" + path.extension().string() +
+                      "' (the content is not PLY, OBJ, OFF or PCD)");
+  }
+}
+
+}  // namespace
+
+FileFormat detect_format(const std::filesystem::path& path) {
+  return format_of_file(head_of(path), path);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Input
+
+struct Input::State {
+  std::string name;
+  std::filesystem::path path;
+  FileFormat format = FileFormat::kPly;
+  Kind kind = Kind::kCloud;
+  Readers readers;
+  std::mutex mutex;
+  std::optional<MeshData> mesh;
+  std::optional<ColoredCloud> cloud;
+};
+
+Input Input::from_file(const std::filesystem::path& path, const Registry& registry) {
+  Input in;
+  in.state_ = std::make_shared<State>();
+  State& s = *in.state_;
+  s.name = path.string();
+  s.path = path;
+  s.readers = registry.readers();
+  const std::string head = head_of(path);
+  s.format = format_of_file(head, path);
+  switch (s.format) {
+    case FileFormat::kPly: {
+      const ply::Header h = ply::parse_header(head, s.name);
+      s.kind = Kind::kCloud;
+      for (const auto& e : h.elements) {
+        if (e.name == "face" && e.count > 0) s.kind = Kind::kMesh;
+      }
+      break;
+    }
+    case FileFormat::kPcd: s.kind = Kind::kCloud; break;
+    case FileFormat::kOff: s.kind = off_has_faces(head) ? Kind::kMesh : Kind::kCloud; break;
+    case FileFormat::kObj: {
+      // Faces may come after many vertices: look at the whole text.
+      const std::string text = head.size() < kSniffBytes ? head : read_file_bytes(path);
+      s.kind = has_line_starting(text, "f ") || has_line_starting(text, "f\t") ? Kind::kMesh
+                                                                               : Kind::kCloud;
+      break;
+    }
+  }
+  return in;
+}
+
+Input Input::from_mesh(ColoredMesh mesh, std::string name, bool has_colors) {
+  Input in;
+  in.state_ = std::make_shared<State>();
+  in.state_->name = std::move(name);
+  in.state_->kind = Kind::kMesh;
+  in.state_->mesh = MeshData{std::move(mesh), has_colors, {}};
+  return in;
+}
+
+Input Input::from_cloud(ColoredCloud cloud, std::string name) {
+  Input in;
+  in.state_ = std::make_shared<State>();
+  in.state_->name = std::move(name);
+  in.state_->kind = Kind::kCloud;
+  in.state_->cloud = std::move(cloud);
+  return in;
+}
+
+const std::string& Input::name() const { return state_->name; }
+const std::filesystem::path& Input::path() const { return state_->path; }
+Input::Kind Input::kind() const { return state_->kind; }
+FileFormat Input::format() const { return state_->format; }
+
+const MeshData& Input::mesh() const {
+  State& s = *state_;
+  std::lock_guard<std::mutex> lock(s.mutex);
+  if (s.mesh) return *s.mesh;
+  // A cloud in a mesh format still goes to the mesh reader, whose error says what is missing.
+  if (s.kind != Kind::kMesh && (s.path.empty() || s.format == FileFormat::kPcd)) {
+    throw FormatError(s.name + ": a point cloud (no faces), not a mesh; score it with PCQM");
+  }
+  if (!s.readers.mesh) throw std::logic_error("no mesh reader registered");
+  s.mesh = s.readers.mesh(s.path, s.format);
+  return *s.mesh;
+}
+
+const ColoredCloud& Input::cloud() const {
+  State& s = *state_;
+  std::lock_guard<std::mutex> lock(s.mutex);
+  if (s.cloud) return *s.cloud;
+  if (s.path.empty()) {  // a mesh in memory: its vertices
+    s.cloud = vertex_cloud(s.mesh->mesh);
+    if (!s.mesh->has_colors) s.cloud->colors.clear();
+    return *s.cloud;
+  }
+  const bool mesh_format = s.format == FileFormat::kObj || s.format == FileFormat::kOff;
+  const auto& read = mesh_format ? s.readers.mesh_vertices : s.readers.cloud;
+  if (!read) throw std::logic_error("no cloud reader registered");
+  s.cloud = read(s.path, s.format);
+  return *s.cloud;
+}
+
+void Input::load(Kind as) const {
+  if (as == Kind::kMesh) {
+    mesh();
+  } else {
+    cloud();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Metric specs and the registry
+
+bool MetricSpec::applies(const Input& reference, const Input& distorted) const {
+  switch (applies_to) {
+    case AppliesTo::kMeshes: return reference.is_mesh() && distorted.is_mesh();
+    case AppliesTo::kClouds: return !reference.is_mesh() && !distorted.is_mesh();
+    case AppliesTo::kBoth: return true;
+  }
+  return false;
+}
+
+namespace {
+
+std::string value_text(const nlohmann::json& v) { return v.dump(); }
+
+void check_value(const MetricSpec& spec, const OptionSpec& o, const nlohmann::json& v) {
+  const auto bad = [&](const std::string& why) {
+    throw std::invalid_argument(spec.name + ": option '" + o.name + "' " + why + " (got " +
+                                value_text(v) + ")");
+  };
+  const nlohmann::json& d = o.default_value;
+  const auto check_number = [&](const nlohmann::json& x) {
+    if (!x.is_number()) bad("must be a number");
+    const double n = x.get<double>();
+    if (!std::isfinite(n)) bad("must be finite");
+    if (n < o.min || (o.min_exclusive && n == o.min)) {
+      bad(std::string("must be ") + (o.min_exclusive ? "> " : ">= ") + value_text(o.min));
+    }
+    if (n > o.max) bad("must be <= " + value_text(o.max));
+  };
+  if (d.is_boolean()) {
+    if (!v.is_boolean()) bad("must be true or false");
+  } else if (d.is_number_integer()) {
+    if (!v.is_number_integer()) bad("must be an integer");
+    check_number(v);
+  } else if (d.is_number()) {
+    check_number(v);
+  } else if (d.is_string()) {
+    if (!v.is_string()) bad("must be a string");
+    if (!o.choices.empty() &&
+        std::find(o.choices.begin(), o.choices.end(), v.get<std::string>()) == o.choices.end()) {
+      std::string list;
+      for (const auto& c : o.choices) list += (list.empty() ? "" : ", ") + c;
+      bad("must be one of " + list);
+    }
+  } else if (d.is_array()) {
+    if (!v.is_array() || v.size() != d.size()) {
+      bad("must be a list of " + std::to_string(d.size()) + " numbers");
+    }
+    for (const auto& x : v) check_number(x);
+  }
+}
+
+}  // namespace
+
+OptionValues MetricSpec::complete(const OptionValues& given) const {
+  if (!given.is_null() && !given.is_object()) {
+    throw std::invalid_argument(name + ": options must be a JSON object");
+  }
+  OptionValues out = nlohmann::json::object();
+  for (const auto& o : options) out[o.name] = o.default_value;
+  if (given.is_object()) {
+    for (const auto& [key, value] : given.items()) {
+      const auto it = std::find_if(options.begin(), options.end(),
+                                   [&](const OptionSpec& o) { return o.name == key; });
+      if (it == options.end()) {
+        std::string known;
+        for (const auto& o : options) known += (known.empty() ? "" : ", ") + o.name;
+        throw std::invalid_argument(name + ": unknown option '" + key + "' (" +
+                                    (known.empty() ? "it takes none" : "known: " + known) + ")");
+      }
+      check_value(*this, *it, value);
+      out[key] = value;
+    }
+  }
+  return out;
+}
+
+void Registry::add(MetricSpec spec) {
+  if (find(spec.name)) throw std::logic_error("metric '" + spec.name + "' registered twice");
+  metrics_.push_back(std::move(spec));
+}
+
+const MetricSpec* Registry::find(const std::string& name) const {
+  for (const auto& m : metrics_) {
+    if (m.name == name) return &m;
+  }
+  return nullptr;
+}
+
+const MetricSpec& Registry::get(const std::string& name) const {
+  if (const MetricSpec* m = find(name)) return *m;
+  std::string known;
+  for (const auto& m : metrics_) known += (known.empty() ? "" : ", ") + m.name;
+  throw FormatError("unknown metric '" + name + "' (expected " + known + ")");
+}
+
+std::vector<const MetricSpec*> Registry::applicable(const Input& reference,
+                                                    const Input& distorted) const {
+  std::vector<const MetricSpec*> out;
+  for (const auto& m : metrics_) {
+    if (m.applies(reference, distorted)) out.push_back(&m);
+  }
+  return out;
+}
+
+const MetricSpec& Registry::auto_metric(const Input& reference, const Input& distorted) const {
+  const auto all = applicable(reference, distorted);
+  if (all.empty()) {
+    throw FormatError("no metric applies to " + reference.name() + " and " + distorted.name());
+  }
+  return *all.front();
+}
+
+const SurfaceSampler& Registry::sampler() const {
+  if (!sampler_) throw std::logic_error("no surface sampler registered (mesh module)");
+  return sampler_;
+}
+
+OptionValues options_for(const MetricSpec& spec, const OptionValues& all) {
+  OptionValues out = nlohmann::json::object();
+  if (!all.is_object()) return out;
+  for (const auto& o : spec.options) {
+    if (all.contains(o.name)) out[o.name] = all[o.name];
+  }
+  return out;
+}
+
+MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
+                        const RunOptions& run, const OptionValues& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const OptionValues values = spec.complete(options);
+  if (run.model && !spec.takes_model) {
+    throw std::invalid_argument(spec.name + " has no linear model: --weights / --model do not apply");
+  }
+  // Both inputs are read concurrently unless one thread was asked for.
+  auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
+                             [&] { reference.load(spec.reads); });
+  distorted.load(spec.reads);
+  ref_task.get();
+  MetricResult result;
+  try {
+    result = spec.run(spec, reference, distorted, run, values);
+  } catch (const NumericError& e) {
+    throw NumericError(e.what() + std::string(" (reference ") + reference.name() +
+                       ", distorted " + distorted.name() + ")");
+  }
+  result.provenance.version = kVersion;
+  result.provenance.reference = reference.name();
+  result.provenance.distorted = distorted.name();
+  result.provenance.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace qm3d

@@ -1,0 +1,63 @@
+#include "qm3d/mesh/metrics.h"
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+#include "qm3d/mesh/mesh_io.h"
+#include "qm3d/mesh/sampling.h"
+#include "qm3d/mesh/texture.h"
+
+namespace qm3d::mesh {
+namespace {
+
+MeshFormat mesh_format(FileFormat f, const std::filesystem::path& path) {
+  switch (f) {
+    case FileFormat::kObj: return MeshFormat::kObj;
+    case FileFormat::kOff: return MeshFormat::kOff;
+    case FileFormat::kPly: return MeshFormat::kPly;
+    case FileFormat::kPcd: break;
+  }
+  throw FormatError(path.string() + ": a PCD file holds a point cloud, not a mesh");
+}
+
+MeshData read_mesh_data(const std::filesystem::path& path, FileFormat format) {
+  const MeshFormat f = mesh_format(format, path);
+  // A textured OBJ takes its vertex colours from its texture (texture.h).
+  if (f == MeshFormat::kObj && obj_is_textured(read_file_bytes(path))) {
+    MeshFile file = read_textured_obj(path).file;
+    return MeshData{std::move(file.mesh), true, std::move(file.warnings)};
+  }
+  MeshFile file = read_mesh(path, f, MeshReadOptions{false});
+  const bool colors = !file.mesh.colors.empty();
+  return MeshData{std::move(file.mesh), colors, std::move(file.warnings)};
+}
+
+ColoredCloud sample(const Input& input, const SurfaceSampling& s) {
+  const SamplingOptions o{s.points, s.density, s.seed};
+  if (!input.path().empty() && input.format() == FileFormat::kObj) {
+    const std::string bytes = read_file_bytes(input.path());
+    if (obj_is_textured(bytes)) return sample_surface(parse_textured_obj(bytes, input.path()), o);
+  }
+  const MeshData& m = input.mesh();
+  if (!m.has_colors) {
+    throw FormatError(input.name() + ": no vertex colours (sampling needs a colour per vertex)");
+  }
+  try {
+    return sample_surface(m.mesh, o);
+  } catch (const NumericError& e) {
+    throw NumericError(input.name() + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+void register_metrics(Registry& registry) {
+  registry.readers().mesh = read_mesh_data;
+  registry.readers().mesh_vertices = [](const std::filesystem::path& path, FileFormat format) {
+    return read_mesh_vertices(path, mesh_format(format, path));
+  };
+  registry.set_sampler(sample);
+  registry.add(cmdm_spec());
+  registry.add(msdm2_spec());
+}
+
+}  // namespace qm3d::mesh

@@ -1,0 +1,23 @@
+// What the point-cloud module brings to a metric registry (qm3d/common/metric.h): PCQM (any two
+// inputs, meshes read as their vertices), PCQM on surface samples of two meshes, and the cloud
+// readers (PLY, PCD).
+#pragma once
+
+#include "qm3d/common/metric.h"
+
+namespace qm3d::pointcloud {
+
+/// PCQM's registry entry (pcqm.cpp): options radius, knn, rx, bbox; a model.
+MetricSpec pcqm_spec();
+/// "pcqm_sampled" (pcqm_sampled.cpp): PCQM on clouds sampled from both meshes alike by
+/// `sample` (the mesh module's sampler); PCQM's options plus points, density, seed.
+MetricSpec pcqm_sampled_spec(SurfaceSampler sample);
+
+/// Samples drawn from each mesh by pcqm_sampled when no points / density is given.
+inline constexpr int kDefaultSampledPoints = 20000;
+
+/// Registers the cloud reader, PCQM and, when a surface sampler is registered (the mesh module,
+/// registered first), pcqm_sampled.
+void register_metrics(Registry& registry);
+
+}  // namespace qm3d::pointcloud

@@ -1,0 +1,19 @@
+#include "qm3d/pointcloud/metrics.h"
+
+#include "qm3d/common/error.h"
+#include "qm3d/pointcloud/cloud_io.h"
+
+namespace qm3d::pointcloud {
+
+void register_metrics(Registry& registry) {
+  registry.readers().cloud = [](const std::filesystem::path& path, FileFormat format) {
+    if (format != FileFormat::kPly && format != FileFormat::kPcd) {
+      throw FormatError(path.string() + ": not a PLY or PCD point cloud");
+    }
+    return read_cloud(path, format == FileFormat::kPcd ? CloudFormat::kPcd : CloudFormat::kPly);
+  };
+  registry.add(pcqm_spec());
+  if (registry.has_sampler()) registry.add(pcqm_sampled_spec(registry.sampler()));
+}
+
+}  // namespace qm3d::pointcloud
