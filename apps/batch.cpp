@@ -177,7 +177,10 @@ std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& met
 }  // namespace
 
 int run_batch(const BatchOptions& o) {
-  const std::vector<Pair> pairs = read_list(o.list);
+  std::vector<Pair> pairs = read_list(o.list);
+  if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const Pair& p) {
+    return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
+  });
   std::set<Key> done;
   const bool exists = std::filesystem::exists(o.output);
   if (exists && o.resume) {

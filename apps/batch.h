@@ -2,8 +2,10 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 
 #include "commands.h"
+#include "shard.h"
 
 namespace qm3d::app {
 
@@ -18,6 +20,7 @@ struct BatchOptions {
   bool resume = false;           ///< skip pairs already in `output`
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
+  std::optional<Shard> shard;    ///< score only this part of the pairs (--shard K/N)
   MetricOptions metrics;
 };
 

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "demo.h"
 #include "eval_commands.h"
+#include "merge_command.h"
 #include "progress_display.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
@@ -242,6 +243,7 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   batch_cmd->add_flag("--resume", batch.resume, "Skip the pairs already in RESULTS");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
+  add_shard_option(batch_cmd, batch.shard);
   add_cmdm_options(batch_cmd, cmdm, direction, weights);
   add_pcqm_options(batch_cmd, pcqm, bbox);
   add_sampling_options(batch_cmd, sampling, sampling_note);
@@ -256,6 +258,8 @@ int run(int argc, char** argv) {
       add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
   const auto sample_commands =
       add_sample_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+  const auto merge_command =
+      add_merge_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
 
   try {
     app.parse(argc, argv);
@@ -267,6 +271,7 @@ int run(int argc, char** argv) {
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   if (const auto code = run_sample_commands(*sample_commands)) return *code;
+  if (const auto code = run_merge_command(*merge_command, global.quiet)) return *code;
   cmdm.direction = parse_direction(direction);
   if (!weights.empty()) std::copy(weights.begin(), weights.end(), cmdm.model.weights.begin());
   cmdm.model.provenance = weights.empty() ? cmdm.model.provenance : "--weights";
