@@ -24,33 +24,7 @@
 namespace qm3d::app {
 namespace {
 
-struct Pair {
-  std::string reference, distorted, metric;  // as written in the list
-};
-
 using Key = std::tuple<std::string, std::string, std::string>;
-
-std::vector<Pair> read_list(const std::filesystem::path& list) {
-  std::istringstream in(read_file_bytes(list));
-  std::vector<Pair> pairs;
-  std::string line;
-  for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
-    if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
-    auto f = csv_split(line);
-    for (auto& s : f) {
-      s.erase(0, s.find_first_not_of(" \t"));
-      s.erase(s.find_last_not_of(" \t") + 1);
-    }
-    if (pairs.empty() && f[0] == "reference") continue;  // header
-    if (f.size() < 2 || f.size() > 3 || f[0].empty() || f[1].empty()) {
-      throw FormatError(list.string() + ": line " + std::to_string(line_no) +
-                        ": expected reference,distorted[,metric]");
-    }
-    pairs.push_back({f[0], f[1], f.size() == 3 && !f[2].empty() ? f[2] : "auto"});
-  }
-  if (pairs.empty()) throw FormatError(list.string() + ": no pairs");
-  return pairs;
-}
 
 // Keys of the rows already in the results; drops a trailing partial line left by a crash.
 std::set<Key> finished_pairs(const std::filesystem::path& output) {
@@ -96,27 +70,6 @@ class RowWriter {
   std::mutex mutex_;
 };
 
-std::filesystem::path resolve(const std::filesystem::path& list, const std::string& p) {
-  const std::filesystem::path path(p);
-  return path.is_absolute() ? path : list.parent_path() / path;
-}
-
-// The metrics of a pair: "compare" becomes one row per metric that applies and "auto" the first
-// (so --resume keys stay (reference, distorted, metric)). Inputs that cannot be recognised keep
-// the name as written: scoring them reports why.
-std::vector<std::string> resolved_metrics(const Pair& pair, const std::filesystem::path& list) {
-  if (pair.metric != "compare" && pair.metric != "auto") return {pair.metric};
-  try {
-    const Input ref = registry().read(resolve(list, pair.reference));
-    const Input dist = registry().read(resolve(list, pair.distorted));
-    std::vector<std::string> names;
-    for (const MetricSpec* m : metrics_for(pair.metric, ref, dist)) names.push_back(m->name);
-    return names;
-  } catch (const Error&) {
-    return {pair.metric};
-  }
-}
-
 class Progress {
  public:
   Progress(std::size_t total, bool quiet)
@@ -156,7 +109,7 @@ class Progress {
 
 // Scores one pair; never throws (a failure becomes the row's error). Returns the row and whether
 // the pair failed.
-std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& metric, const BatchOptions& o) {
+std::pair<std::string, bool> score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
     const Input r = registry().read(ref), d = registry().read(dist);
@@ -172,8 +125,30 @@ std::pair<std::string, bool> score_pair(const Pair& pair, const std::string& met
 
 }  // namespace
 
+std::filesystem::path resolve(const std::filesystem::path& list, const std::string& p) {
+  const std::filesystem::path path(p);
+  return path.is_absolute() ? path : list.parent_path() / path;
+}
+
+std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesystem::path& list) {
+  if (pair.metric != "compare" && pair.metric != "auto") return {pair.metric};
+  try {
+    const Input ref = registry().read(resolve(list, pair.reference));
+    const Input dist = registry().read(resolve(list, pair.distorted));
+    std::vector<std::string> names;
+    for (const MetricSpec* m : metrics_for(pair.metric, ref, dist)) names.push_back(m->name);
+    return names;
+  } catch (const Error&) {
+    return {pair.metric};
+  }
+}
+
 int run_batch(const BatchOptions& o) {
-  const std::vector<Pair> pairs = read_list(o.list);
+  std::vector<ListPair> pairs =
+      parse_pair_list(read_file_bytes(o.list), o.list.string());
+  if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
+    return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
+  });
   std::set<Key> done;
   const bool exists = std::filesystem::exists(o.output);
   if (exists && o.resume) {
@@ -184,10 +159,10 @@ int run_batch(const BatchOptions& o) {
   } else if (exists) {
     std::filesystem::remove(o.output);
   }
-  std::vector<std::pair<Pair, std::string>> todo;
+  std::vector<std::pair<ListPair, std::string>> todo;
   std::size_t rows = 0;  // (pair, metric) rows the list asks for
-  for (const Pair& p : pairs) {
-    for (const std::string& metric : resolved_metrics(p, o.list)) {
+  for (const ListPair& p : pairs) {
+    for (const std::string& metric : batch_metrics(p, o.list)) {
       ++rows;
       if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
     }

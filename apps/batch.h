@@ -2,8 +2,10 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 
 #include "commands.h"
+#include "shard.h"
 
 namespace qm3d::app {
 
@@ -18,7 +20,17 @@ struct BatchOptions {
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
   ScoreRequest request;          ///< run options (threads set per job) and metric options
+  std::optional<Shard> shard;    ///< score only this part of the pairs (--shard K/N)
 };
+
+/// A list's relative path resolved against the list's folder.
+std::filesystem::path resolve(const std::filesystem::path& list, const std::string& path);
+
+/// The metric rows batch writes for a pair, in its order: "compare" is one row per metric that
+/// applies and "auto" the first that applies (commands.h metrics_for), so that --resume and
+/// merge key rows by (reference, distorted, metric); inputs that cannot be recognised keep the
+/// name as written (scoring them records why).
+std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesystem::path& list);
 
 /// Runs the batch. Returns 0 when every pair succeeded and 2 when some failed (their rows carry
 /// the error). Throws InputError / FormatError when the list or the output cannot be used.

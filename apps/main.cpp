@@ -13,6 +13,7 @@
 #include "commands.h"
 #include "demo.h"
 #include "eval_commands.h"
+#include "merge_command.h"
 #include "progress_display.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
@@ -382,6 +383,7 @@ int run(int argc, char** argv) {
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
   add_run_options(batch_cmd, batch_run, nullptr);
   add_metric_options(batch_cmd, all_metrics(), batch_options);
+  add_shard_option(batch_cmd, batch.shard);
 
   auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d with "
                                               "every metric that applies and print the table");
@@ -393,6 +395,8 @@ int run(int argc, char** argv) {
       add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
   const auto sample_commands =
       add_sample_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+  const auto merge_command =
+      add_merge_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
 
   try {
     app.parse(argc, argv);
@@ -404,6 +408,7 @@ int run(int argc, char** argv) {
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   if (const auto code = run_sample_commands(*sample_commands)) return *code;
+  if (const auto code = run_merge_command(*merge_command, global.quiet)) return *code;
   for (const ScoreCommand& c : score_commands) {
     if (*c.cmd) return run_score_command(c, score_cli, global);
   }

@@ -21,6 +21,7 @@ PACKAGES=(
   clang libclang-rt-14-dev
   python3 python3-numpy time
   gnuplot-nox
+  slurm-wlm munge
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }

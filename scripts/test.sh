@@ -2,7 +2,8 @@
 # Runs the whole qm3d test suite with ctest (building first if needed).
 #
 #   scripts/test.sh              # normal Release build in build/, then the installed package
-#                                # used by tests/downstream (scripts/test_downstream.sh)
+#                                # used by tests/downstream (scripts/test_downstream.sh) and
+#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -32,4 +33,8 @@ ctest --output-on-failure -j "$JOBS" "${CTEST_ARGS[@]}"
 # (the downstream program would need their runtime too).
 if [ ${#EXTRA[@]} -eq 0 ]; then
   bash "$ROOT/scripts/test_downstream.sh" "$BUILD_DIR"
+  # scripts/slurm/ on a private one-node Slurm cluster (exit 77: skipped, no Slurm/munge or root).
+  slurm_rc=0
+  bash "$ROOT/tests/slurm/test_slurm.sh" "$BUILD_DIR/apps/qm3d" || slurm_rc=$?
+  [ "$slurm_rc" -eq 0 ] || [ "$slurm_rc" -eq 77 ] || exit "$slurm_rc"
 fi

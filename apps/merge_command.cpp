@@ -1,0 +1,138 @@
+#include "merge_command.h"
+
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+#include "batch.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
+
+namespace qm3d::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// At most this many pairs are named per kind of problem; the rest are counted.
+constexpr std::size_t kMaxListed = 20;
+
+void print_list(const std::string& prefix, const std::vector<std::string>& items) {
+  for (std::size_t i = 0; i < items.size() && i < kMaxListed; ++i) {
+    std::cerr << prefix << items[i] << "\n";
+  }
+  if (items.size() > kMaxListed) {
+    std::cerr << prefix << "... and " << items.size() - kMaxListed << " more\n";
+  }
+}
+
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec) && !ec;
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+int run_merge(const MergeCommand& c, bool quiet) {
+  const fs::path list(c.list);
+  std::vector<ResultKey> expected;
+  for (const ListPair& pair : parse_pair_list(read_file_bytes(list), list.string())) {
+    for (const std::string& metric : batch_metrics(pair, list)) {
+      expected.push_back({pair.reference, pair.distorted, metric});
+    }
+  }
+  std::vector<ResultFile> files;
+  std::set<std::string> seen;
+  for (const std::string& input : c.inputs) {
+    if (same_file(input, c.output)) {
+      throw InputError(input + ": is both an input and the output (-o)");
+    }
+    if (!seen.insert(fs::weakly_canonical(input).string()).second) {
+      throw InputError(input + ": given twice");
+    }
+    files.push_back({input, read_file_bytes(input)});
+  }
+  const MergeResult m = merge_results(expected, files);
+
+  if (!quiet) {
+    print_list("qm3d: warning: ", m.warnings);
+    print_list("qm3d: warning: duplicated: ", m.duplicates);
+    print_list("qm3d: warning: not in " + c.list + ", dropped: ", m.unexpected);
+    print_list("merge: failed: ", m.failed);
+  }
+  print_list("merge: missing: ", m.missing);
+  print_list("merge: conflicting rows: ", m.conflicts);
+  if (!m.conflicts.empty()) {
+    throw FormatError(std::to_string(m.conflicts.size()) +
+                      " pairs have conflicting rows in the shard results (listed above); "
+                      "nothing written to " + c.output);
+  }
+  if (!m.missing.empty() && !c.partial) {
+    throw InputError(std::to_string(m.missing.size()) + " of " +
+                     std::to_string(m.rows.size() + m.missing.size()) +
+                     " rows are in no shard result (listed above: did every shard finish? "
+                     "rerun a shard with --resume); nothing written to " + c.output +
+                     " (--partial writes the rows found)");
+  }
+  write_file_atomically(c.output, [&](std::ostream& out) {
+    out << m.header << "\n";
+    for (const std::string& row : m.rows) out << row << "\n";
+  });
+  if (!quiet) {
+    std::cerr << "merge: " << m.rows.size() << " rows from " << m.files << " files ("
+              << m.rows.size() - m.failed.size() << " ok, " << m.failed.size() << " failed, "
+              << m.missing.size() << " missing) written to " << c.output << "\n";
+  }
+  return m.failed.empty() && m.missing.empty() ? 0 : 2;
+}
+
+}  // namespace
+
+std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
+                                                const std::function<void(CLI::App*)>& add_common) {
+  auto c = std::make_unique<MergeCommand>();
+  c->merge = app.add_subcommand(
+      "merge",
+      "Join the results of `qm3d batch LIST --shard K/N` runs into the rows one `qm3d batch "
+      "LIST` would have written, in LIST's order. Missing, duplicated, conflicting and failed "
+      "pairs are reported on stderr; exit code 2 when a pair is missing, conflicts or failed");
+  add_common(c->merge);
+  c->merge->add_option("SHARD_RESULTS", c->inputs, "Results CSVs of the shards (e.g. out/OUT_*.csv)")
+      ->required();
+  c->merge->add_option("-o,--output", c->output, "Merged results CSV (written atomically)")
+      ->required()
+      ->type_name("RESULTS.csv");
+  c->merge->add_option("--list", c->list,
+                       "The list the shards scored: gives the rows expected and their order")
+      ->required()
+      ->type_name("LIST.csv");
+  c->merge->add_flag("--partial", c->partial,
+                     "Write the rows found even when some are missing (exit code still 2)");
+  return c;
+}
+
+std::optional<int> run_merge_command(const MergeCommand& command, bool quiet) {
+  if (!command.merge->parsed()) return std::nullopt;
+  return run_merge(command, quiet);
+}
+
+void add_shard_option(CLI::App* batch_cmd, std::optional<Shard>& shard) {
+  const CLI::Validator valid_shard(
+      [](std::string& text) {
+        try {
+          parse_shard(text);
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+      },
+      "", "shard");
+  batch_cmd
+      ->add_option_function<std::string>(
+          "--shard", [&shard](const std::string& text) { shard = parse_shard(text); },
+          "Score only part K of N (K = 0..N-1, e.g. $SLURM_ARRAY_TASK_ID/N): the list's pairs "
+          "are split into N parts of about equal total file size, the same on every run; give "
+          "each part its own RESULTS and join them with `qm3d merge`")
+      ->type_name("K/N")
+      ->check(valid_shard);
+}
+
+}  // namespace qm3d::app
