@@ -23,7 +23,7 @@ constexpr std::size_t kConcurrentMatchFaces = 1000000;
 struct PreparedMesh {
   HalfedgeMesh mesh;
   std::vector<Lab> lab;       ///< LAB2000HL per vertex (empty when colour is not used)
-  double bbox_max_side = 0;
+  double box_size = 0;
   std::size_t input_vertices = 0;
 };
 
@@ -52,28 +52,28 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   PreparedMesh p;
   p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges, threads);
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
-  p.bbox_max_side = longest_side(p.mesh, name);
+  p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
   return p;
 }
 
-// Values of the second mesh interpolated at each matched point.
+// Values of the other mesh interpolated at each matched point.
 std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& second, const std::vector<double>& values) {
+                                    const HalfedgeMesh& other, const std::vector<double>& values) {
   std::vector<double> out(matches.size());
   for (std::size_t i = 0; i < matches.size(); ++i) {
-    out[i] = interpolate(matches[i], second.triangles[matches[i].face], values);
+    out[i] = interpolate(matches[i], other.triangles[matches[i].face], values);
   }
   return out;
 }
 
 std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& second, const std::vector<Lab>& colors) {
+                                    const HalfedgeMesh& other, const std::vector<Lab>& colors) {
   std::vector<double> channel(colors.size());
   std::vector<Lab> out(matches.size());
   for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
     for (std::size_t i = 0; i < colors.size(); ++i) channel[i] = colors[i].*c;
-    const auto values = interpolate_all(matches, second, channel);
+    const auto values = interpolate_all(matches, other, channel);
     for (std::size_t i = 0; i < out.size(); ++i) out[i].*c = values[i];
   }
   return out;
@@ -129,24 +129,24 @@ void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
 }
 
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
-std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const PreparedMesh& second,
+std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const PreparedMesh& other,
                                           const MultiscaleDefinition& def, int scales,
                                           int threads, CurvatureCache& curvatures,
                                           SurfaceMatches matching, const std::string& label,
                                           ProgressSteps& progress) {
   const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
-  if (def.uses_color) lab_match = interpolate_colors(matches, second.mesh, second.lab);
-  const double maxdim = first.bbox_max_side;
-  std::vector<FeatureVector> sums(first.mesh.positions.size(), FeatureVector{});
+  if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab);
+  const double maxdim = iterated.box_size;
+  std::vector<FeatureVector> sums(iterated.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
   for (int level = 0; level < scales; ++level) {
     progress.begin(label + ": scale " + std::to_string(level + 1) + "/" + std::to_string(scales));
-    const auto& curv1 = curvatures.get(first.mesh, maxdim * rc, maxdim);
+    const auto& curv1 = curvatures.get(iterated.mesh, maxdim * rc, maxdim);
     const auto curv_match =
-        interpolate_all(matches, second.mesh, curvatures.get(second.mesh, maxdim * rc, maxdim));
-    const MatchedFields fields{&first.mesh, &matched_point, &curv1, &curv_match,
-                               def.uses_color ? &first.lab : nullptr,
+        interpolate_all(matches, other.mesh, curvatures.get(other.mesh, maxdim * rc, maxdim));
+    const MatchedFields fields{&iterated.mesh, &matched_point, &curv1, &curv_match,
+                               def.uses_color ? &iterated.lab : nullptr,
                                def.uses_color ? &lab_match : nullptr};
     const double h = rc * def.neighbourhood_factor * maxdim;
     accumulate_scale(fields, {h, h / def.sigma_divisor, def.strict_outward_test}, def.conventions,
@@ -156,28 +156,28 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& first, const Prepa
   return sums;
 }
 
-SurfaceMatches match(const PreparedMesh& first, const PreparedMesh& second,
+SurfaceMatches match(const PreparedMesh& iterated, const PreparedMesh& other,
                      const MultiscaleDefinition& def, int threads) {
-  return match_to_surface(first.mesh.positions, second.mesh, def.anchor, threads);
+  return match_to_surface(iterated.mesh.positions, other.mesh, def.anchor, threads);
 }
 
-DirectionResult run_direction(const PreparedMesh& first, const PreparedMesh& second,
+DirectionResult run_direction(const PreparedMesh& iterated, const PreparedMesh& other,
                               const MultiscaleDefinition& def, int scales, int threads,
                               CurvatureCache& curvatures, const DirectionPooling& pool,
                               std::optional<SurfaceMatches> matching, const std::string& label,
                               ProgressSteps& progress) {
   DirectionResult result;
-  result.box_size = first.bbox_max_side;
+  result.box_size = iterated.box_size;
   if (!matching) {
     progress.begin(label + ": closest points");
-    matching = match(first, second, def, threads);
+    matching = match(iterated, other, def, threads);
   }
-  auto sums = direction_sums(first, second, def, scales, threads, curvatures, std::move(*matching),
+  auto sums = direction_sums(iterated, other, def, scales, threads, curvatures, std::move(*matching),
                              label, progress);
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
-  if (result.per_element.size() > first.input_vertices) {
-    result.per_element.resize(first.input_vertices);
+  if (result.per_element.size() > iterated.input_vertices) {
+    result.per_element.resize(iterated.input_vertices);
   }
   return result;
 }
@@ -211,7 +211,7 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
-  CurvatureCache curvatures(def.curvature, both && ref.bbox_max_side == dist.bbox_max_side,
+  CurvatureCache curvatures(def.curvature, both && ref.box_size == dist.box_size,
                             threads);
   // Closest-point matching builds one AABB tree per direction, sequentially inside CGAL. When
   // both directions are needed and the trees are small, both are matched concurrently up front;

@@ -2,6 +2,8 @@
 // iterated cloud's k-d tree, which is spatially coherent: consecutive queries touch the same tree
 // nodes and, in stage 2, neighbours' stage-1 values lie close together in memory. Results are
 // written per point and summed later in input order, so any thread count gives the same bits.
+// Names: `iterated` is the cloud whose points are visited, `other` the one they are matched on;
+// comments use the spec's R (iterated) and D (other), which they are in the reference's direction.
 #include <omp.h>
 
 #include <algorithm>
@@ -54,50 +56,50 @@ struct PointData {
   explicit PointData(std::size_t n, bool diagnostics)
       : correspondence(n),
         correspondence_is_point(n),
-        curvature_ref(n),
-        curvature_dist(n),
-        lightness_ref(n),
-        lightness_dist(n),
-        chroma_ref(n),
-        chroma_dist(n),
+        curvature_iterated(n),
+        curvature_other(n),
+        lightness_iterated(n),
+        lightness_other(n),
+        chroma_iterated(n),
+        chroma_other(n),
         hue_difference(n),
         underdetermined(n) {
     if (diagnostics) {
-      lab_ref.resize(n);
-      lab_dist.resize(n);
-      count_radius_dist.resize(n);
-      count_radius_ref.resize(n);
+      lab_iterated.resize(n);
+      lab_other.resize(n);
+      count_radius_other.resize(n);
+      count_radius_iterated.resize(n);
     }
   }
   std::vector<Vec3> correspondence;
   std::vector<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
-  std::vector<double> curvature_ref, curvature_dist;
-  std::vector<double> lightness_ref, lightness_dist, chroma_ref, chroma_dist, hue_difference;
+  std::vector<double> curvature_iterated, curvature_other;
+  std::vector<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other, hue_difference;
   /// Which of p's quadric fits are underdetermined (quadric_fit.h): kCurvatureFit, kMatchFit.
   std::vector<std::uint8_t> underdetermined;
-  std::vector<Lab> lab_ref, lab_dist;                              // diagnostics only
-  std::vector<std::uint32_t> count_radius_dist, count_radius_ref;  // diagnostics only
+  std::vector<Lab> lab_iterated, lab_other;                              // diagnostics only
+  std::vector<std::uint32_t> count_radius_other, count_radius_iterated;  // diagnostics only
 };
 
 /// The two clouds with their trees; indices are tree indices. When both clouds have the same
 /// positions in the same order (a colour-only distortion) they share one tree.
 struct Clouds {
-  const ColoredCloud& ref;
-  const ColoredCloud& dist;
-  const KdTree& ref_tree;
-  const KdTree& dist_tree;
+  const ColoredCloud& iterated;
+  const ColoredCloud& other;
+  const KdTree& iterated_tree;
+  const KdTree& other_tree;
   bool same_positions;
 };
 
 struct Stage1Scratch {
-  CandidateSet near_dist;   ///< D's points within r of the batch's box
-  CandidateSet reach_dist;  ///< D's points within the batch's kNN reach (gathered when needed)
-  CandidateSet near_ref;    ///< R's points within r of the batch's box (when positions differ)
+  CandidateSet near_other;     ///< D's points within r of the batch's box
+  CandidateSet reach_other;    ///< D's points within the batch's kNN reach (gathered when needed)
+  CandidateSet near_iterated;  ///< R's points within r of the batch's box (when positions differ)
   bool have_reach = false;
   /// The last list of D (of R) had equal distances: search the next one in the reference's
   /// order directly (on voxelised clouds nearly every list has ties).
-  bool ties_dist = false, ties_ref = false;
-  std::vector<Neighbour> nearest, within_dist, within_ref;
+  bool ties_other = false, ties_iterated = false;
+  std::vector<Neighbour> nearest, within_other, within_iterated;
   QuadricFitter fitter;
   // The last query whose kNN was computed and its k-th nearest distance on D: they bound the
   // next query's k-th distance by the triangle inequality, d_k(q) <= d_k(prev) + |q - prev|.
@@ -118,32 +120,34 @@ bool same_coordinates(const std::vector<Vec3>& a_points, const std::vector<Neigh
 /// lists sorted by distance. The fit is a pure function of the neighbour coordinates, so when
 /// both lists hold the same coordinates (unchanged geometry) it is computed once.
 void curvatures(std::size_t i, const Clouds& c, const DirectionParams& params,
-                const std::vector<Neighbour>& within_dist, const std::vector<Neighbour>& within_ref,
+                const std::vector<Neighbour>& within_other, const std::vector<Neighbour>& within_iterated,
                 QuadricFitter& fitter, PointData& out) {
-  const Vec3& p = c.ref_tree.points()[i];
-  const QuadricFit dist = fitter.fit(p, c.dist_tree.points(), within_dist);
-  const QuadricFit ref =
-      same_coordinates(c.dist_tree.points(), within_dist, c.ref_tree.points(), within_ref)
-          ? dist
-          : fitter.fit(p, c.ref_tree.points(), within_ref);
-  out.curvature_dist[i] = std::abs(dist.mean_curvature) * params.max_dim;
-  out.curvature_ref[i] = std::abs(ref.mean_curvature) * params.max_dim;
-  if (dist.underdetermined || ref.underdetermined) out.underdetermined[i] |= kCurvatureFit;
+  const Vec3& p = c.iterated_tree.points()[i];
+  const QuadricFit on_other = fitter.fit(p, c.other_tree.points(), within_other);
+  const QuadricFit on_iterated =
+      same_coordinates(c.other_tree.points(), within_other, c.iterated_tree.points(), within_iterated)
+          ? on_other
+          : fitter.fit(p, c.iterated_tree.points(), within_iterated);
+  out.curvature_other[i] = std::abs(on_other.mean_curvature) * params.max_dim;
+  out.curvature_iterated[i] = std::abs(on_iterated.mean_curvature) * params.max_dim;
+  if (on_other.underdetermined || on_iterated.underdetermined) {
+    out.underdetermined[i] |= kCurvatureFit;
+  }
 }
 
 /// LAB2000HL of p's colour and of nn_D(p)'s colour, chroma, and the hue difference.
 void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab2000hlTable& table,
              PointData& out) {
-  const Lab ref = table.from_srgb(c.ref.colors[c.ref_tree.input_index()[i]]);
-  const Lab dist = table.from_srgb(c.dist.colors[c.dist_tree.input_index()[nearest]]);
-  out.lightness_ref[i] = ref.L;
-  out.lightness_dist[i] = dist.L;
-  out.chroma_ref[i] = chroma(ref);
-  out.chroma_dist[i] = chroma(dist);
-  out.hue_difference[i] = hue_difference(ref, dist);
-  if (!out.lab_ref.empty()) {
-    out.lab_ref[i] = ref;
-    out.lab_dist[i] = dist;
+  const Lab own = table.from_srgb(c.iterated.colors[c.iterated_tree.input_index()[i]]);
+  const Lab matched = table.from_srgb(c.other.colors[c.other_tree.input_index()[nearest]]);
+  out.lightness_iterated[i] = own.L;
+  out.lightness_other[i] = matched.L;
+  out.chroma_iterated[i] = chroma(own);
+  out.chroma_other[i] = chroma(matched);
+  out.hue_difference[i] = hue_difference(own, matched);
+  if (!out.lab_iterated.empty()) {
+    out.lab_iterated[i] = own;
+    out.lab_other[i] = matched;
   }
 }
 
@@ -151,9 +155,9 @@ void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab200
 /// batch's first point p0. Also starts the chain of kNN bounds at p0.
 void gather_reach(const std::array<std::uint32_t, 2>& batch, const Clouds& c, std::size_t k,
                   Stage1Scratch& s) {
-  const std::vector<Vec3>& points = c.ref_tree.points();
+  const std::vector<Vec3>& points = c.iterated_tree.points();
   const Vec3& p0 = points[batch[0]];
-  c.dist_tree.knn_search(p0, k, s.nearest);
+  c.other_tree.knn_search(p0, k, s.nearest);
   double spread2 = 0;
   for (std::uint32_t i = batch[0] + 1; i < batch[1]; ++i) {
     spread2 = std::max(spread2, squared_distance(p0, points[i]));
@@ -161,7 +165,7 @@ void gather_reach(const std::array<std::uint32_t, 2>& batch, const Clouds& c, st
   s.previous = p0;
   s.previous_kth = std::sqrt(s.nearest.back().distance2);
   const double reach = (s.previous_kth + std::sqrt(spread2)) * kReachSlack;
-  s.reach_dist.gather(c.dist_tree, box_of(points, batch[0], batch[1]), reach * reach);
+  s.reach_other.gather(c.other_tree, box_of(points, batch[0], batch[1]), reach * reach);
   s.have_reach = true;
 }
 
@@ -180,7 +184,7 @@ void sorted_within(const KdTree& tree, CandidateSet& near, const Vec3& p, double
   ties = has_ties(out);
 }
 
-/// nn_D(p) (returned, a D tree index), D's points within r of p (s.within_dist, sorted) and
+/// nn_D(p) (returned, a D tree index), D's points within r of p (s.within_other, sorted) and
 /// p-hat (SPEC-PCQM 1.4 step 3): the foot point of the quadric fitted to p's kNN on D when it is
 /// not farther from p than nn_D(p), else nn_D(p). When a point of D coincides with p, it is
 /// nn_D(p) and the foot point can only tie with it at distance 0: no kNN, no fit.
@@ -191,31 +195,31 @@ void sorted_within(const KdTree& tree, CandidateSet& near, const Vec3& p, double
 std::uint32_t match(const std::array<std::uint32_t, 2>& batch, std::size_t i, const Clouds& c,
                     const DirectionParams& params, const Radii& radii, Stage1Scratch& s,
                     Vec3& correspondence, std::uint8_t& underdetermined) {
-  const Vec3& p = c.ref_tree.points()[i];
-  const std::vector<Vec3>& dist_points = c.dist_tree.points();
-  sorted_within(c.dist_tree, s.near_dist, p, radii.curvature2, s.ties_dist, s.within_dist);
-  if (!s.within_dist.empty() && s.within_dist.front().distance2 == 0) {
-    std::uint32_t nearest = s.within_dist.front().index;
-    if (s.within_dist.size() > 1 && s.within_dist[1].distance2 == 0) {
-      c.dist_tree.knn_search(p, 1, s.nearest);  // several points coincide with p
+  const Vec3& p = c.iterated_tree.points()[i];
+  const std::vector<Vec3>& other_points = c.other_tree.points();
+  sorted_within(c.other_tree, s.near_other, p, radii.curvature2, s.ties_other, s.within_other);
+  if (!s.within_other.empty() && s.within_other.front().distance2 == 0) {
+    std::uint32_t nearest = s.within_other.front().index;
+    if (s.within_other.size() > 1 && s.within_other[1].distance2 == 0) {
+      c.other_tree.knn_search(p, 1, s.nearest);  // several points coincide with p
       nearest = s.nearest.front().index;
     }
-    correspondence = dist_points[nearest];
+    correspondence = other_points[nearest];
     return nearest;
   }
-  if (s.ties_dist) {
-    c.dist_tree.knn_search(p, params.knn, s.nearest);
+  if (s.ties_other) {
+    c.other_tree.knn_search(p, params.knn, s.nearest);
   } else {
     if (!s.have_reach) gather_reach(batch, c, params.knn, s);
     const double bound =
         (s.previous_kth + std::sqrt(squared_distance(p, s.previous))) * kReachSlack;
-    const CandidateSet::Knn found = s.reach_dist.knn(p, params.knn, bound * bound, s.nearest);
+    const CandidateSet::Knn found = s.reach_other.knn(p, params.knn, bound * bound, s.nearest);
     s.previous_kth = std::sqrt(found.kth_distance2);
     s.previous = p;
-    if (found.tie_at_kth || has_ties(s.nearest)) c.dist_tree.knn_search(p, params.knn, s.nearest);
+    if (found.tie_at_kth || has_ties(s.nearest)) c.other_tree.knn_search(p, params.knn, s.nearest);
   }
-  const Vec3& closest = dist_points[s.nearest.front().index];
-  const QuadricFit fit = s.fitter.fit(p, dist_points, s.nearest);
+  const Vec3& closest = other_points[s.nearest.front().index];
+  const QuadricFit fit = s.fitter.fit(p, other_points, s.nearest);
   if (fit.underdetermined) underdetermined |= kMatchFit;
   correspondence = point_distance(p, fit.foot) <= point_distance(p, closest) ? fit.foot : closest;
   return s.nearest.front().index;
@@ -224,29 +228,29 @@ std::uint32_t match(const std::array<std::uint32_t, 2>& batch, std::size_t i, co
 void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, const Clouds& c,
                   const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                   Stage1Scratch& s, PointData& out) {
-  const Vec3& p = c.ref_tree.points()[i];
+  const Vec3& p = c.iterated_tree.points()[i];
   const std::uint32_t nearest =
       match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
   out.correspondence_is_point[i] = out.correspondence[i] == p;
-  const std::vector<Neighbour>& within_ref = c.same_positions ? s.within_dist : s.within_ref;
+  const std::vector<Neighbour>& within_iterated = c.same_positions ? s.within_other : s.within_iterated;
   if (!c.same_positions) {
-    sorted_within(c.ref_tree, s.near_ref, p, radii.curvature2, s.ties_ref, s.within_ref);
+    sorted_within(c.iterated_tree, s.near_iterated, p, radii.curvature2, s.ties_iterated, s.within_iterated);
   }
-  if (!out.count_radius_dist.empty()) {
-    out.count_radius_dist[i] = static_cast<std::uint32_t>(s.within_dist.size());
-    out.count_radius_ref[i] = static_cast<std::uint32_t>(within_ref.size());
+  if (!out.count_radius_other.empty()) {
+    out.count_radius_other[i] = static_cast<std::uint32_t>(s.within_other.size());
+    out.count_radius_iterated[i] = static_cast<std::uint32_t>(within_iterated.size());
   }
-  curvatures(i, c, params, s.within_dist, within_ref, s.fitter, out);
+  curvatures(i, c, params, s.within_other, within_iterated, s.fitter, out);
   colours(i, nearest, c, table, out);
 }
 
 void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
                  const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                  Stage1Scratch& s, PointData& out) {
-  const Box box = box_of(c.ref_tree.points(), batch[0], batch[1]);
-  s.near_dist.gather(c.dist_tree, box, radii.curvature2);
+  const Box box = box_of(c.iterated_tree.points(), batch[0], batch[1]);
+  s.near_other.gather(c.other_tree, box, radii.curvature2);
   s.have_reach = false;
-  if (!c.same_positions) s.near_ref.gather(c.ref_tree, box, radii.curvature2);
+  if (!c.same_positions) s.near_iterated.gather(c.iterated_tree, box, radii.curvature2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     stage1_point(batch, i, c, params, radii, table, s, out);
   }
@@ -283,8 +287,8 @@ void for_each_batch(const KdTree& tree, int threads, Visit&& visit) {
 
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
                  const Lab2000hlTable& table) {
-  PointData out(c.ref_tree.size(), params.diagnostics);
-  for_each_batch<Stage1Scratch>(c.ref_tree, params.threads, [&](const auto& batch, auto& scratch) {
+  PointData out(c.iterated_tree.size(), params.diagnostics);
+  for_each_batch<Stage1Scratch>(c.iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
     stage1_batch(batch, c, params, radii, table, scratch, out);
   });
   return out;
@@ -315,37 +319,37 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
                     ? w1
                     : gaussian_weight(point_distance(d.correspondence[i], d.correspondence[j]),
                                       radii.sigma);
-    out.curv1[k] = d.curvature_ref[j];
-    out.curv2[k] = d.curvature_dist[j];
-    out.light1[k] = d.lightness_ref[j];
-    out.light2[k] = d.lightness_dist[j];
-    out.chroma1[k] = d.chroma_ref[j];
-    out.chroma2[k] = d.chroma_dist[j];
+    out.curv1[k] = d.curvature_iterated[j];
+    out.curv2[k] = d.curvature_other[j];
+    out.light1[k] = d.lightness_iterated[j];
+    out.light2[k] = d.lightness_other[j];
+    out.chroma1[k] = d.chroma_iterated[j];
+    out.chroma2[k] = d.chroma_other[j];
     out.hue_diff[k] = d.hue_difference[j];
   }
 }
 
 /// f1..f3 and s4..s8 (similarities, pooled as the reference pools them) of the points of one
 /// batch, stored at their input indices.
-void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& ref_tree,
+void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& iterated_tree,
                  const PointData& d, const Radii& radii, Stage2Scratch& s,
                  std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
-  s.candidates.gather(ref_tree, box_of(ref_tree.points(), batch[0], batch[1]), radii.statistics2);
+  s.candidates.gather(iterated_tree, box_of(iterated_tree.points(), batch[0], batch[1]), radii.statistics2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
-    s.candidates.radius(ref_tree.points()[i], radii.statistics2, s.within);
+    s.candidates.radius(iterated_tree.points()[i], radii.statistics2, s.within);
     gather_samples(i, d, radii, s);
-    const std::uint32_t input = ref_tree.input_index()[i];
+    const std::uint32_t input = iterated_tree.input_index()[i];
     features[input] = local_features_and_similarities(s.samples, kPcqmConventions);
     if (counts != nullptr) (*counts)[input] = static_cast<std::uint32_t>(s.within.size());
   }
 }
 
-std::vector<FeatureVector> stage2(const KdTree& ref_tree, const PointData& d,
+std::vector<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& d,
                                   const DirectionParams& params, const Radii& radii,
                                   std::vector<std::uint32_t>* counts) {
-  std::vector<FeatureVector> features(ref_tree.size());
-  for_each_batch<Stage2Scratch>(ref_tree, params.threads, [&](const auto& batch, auto& scratch) {
-    stage2_batch(batch, ref_tree, d, radii, scratch, features, counts);
+  std::vector<FeatureVector> features(iterated_tree.size());
+  for_each_batch<Stage2Scratch>(iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
+    stage2_batch(batch, iterated_tree, d, radii, scratch, features, counts);
   });
   return features;
 }
@@ -385,8 +389,8 @@ Suggestion suggest_settings(const Clouds& c, const DirectionParams& params, std:
     for (double rel = params.radius_rel * 1.25; rel <= params.radius_rel * kMaxGrowth;
          rel *= 1.25) {
       const double r = rel * params.max_dim;
-      const double share = sampled_share(c.ref_tree, [&](const Vec3& p) {
-        for (const KdTree* tree : {&c.dist_tree, &c.ref_tree}) {
+      const double share = sampled_share(c.iterated_tree, [&](const Vec3& p) {
+        for (const KdTree* tree : {&c.other_tree, &c.iterated_tree}) {
           tree->sorted_radius_search(p, r * r, found);
           if (fitter.fit(p, tree->points(), found).underdetermined) return true;
         }
@@ -400,12 +404,12 @@ Suggestion suggest_settings(const Clouds& c, const DirectionParams& params, std:
   }
   if (kinds & kMatchFit) {
     for (std::size_t k = params.knn + (params.knn + 1) / 2;
-         k <= params.knn * kMaxGrowth && k <= c.dist_tree.size(); k += (k + 1) / 2) {
-      const double share = sampled_share(c.ref_tree, [&](const Vec3& p) {
-        c.dist_tree.knn_search(p, k, found);
+         k <= params.knn * kMaxGrowth && k <= c.other_tree.size(); k += (k + 1) / 2) {
+      const double share = sampled_share(c.iterated_tree, [&](const Vec3& p) {
+        c.other_tree.knn_search(p, k, found);
         // A point of D on p is its correspondence: no fit (match()).
         return found.front().distance2 != 0 &&
-               fitter.fit(p, c.dist_tree.points(), found).underdetermined;
+               fitter.fit(p, c.other_tree.points(), found).underdetermined;
       });
       if (share <= kTarget) {
         out.knn = k;
@@ -419,15 +423,15 @@ Suggestion suggest_settings(const Clouds& c, const DirectionParams& params, std:
 PointDiagnostics diagnostics_of(const PointData& d, const KdTree& tree) {
   PointDiagnostics out;
   out.correspondence = to_input_order(d.correspondence, tree);
-  out.curvature_ref = to_input_order(d.curvature_ref, tree);
-  out.curvature_dist = to_input_order(d.curvature_dist, tree);
-  out.lab_ref = to_input_order(d.lab_ref, tree);
-  out.lab_dist = to_input_order(d.lab_dist, tree);
-  out.chroma_ref = to_input_order(d.chroma_ref, tree);
-  out.chroma_dist = to_input_order(d.chroma_dist, tree);
+  out.curvature_iterated = to_input_order(d.curvature_iterated, tree);
+  out.curvature_other = to_input_order(d.curvature_other, tree);
+  out.lab_iterated = to_input_order(d.lab_iterated, tree);
+  out.lab_other = to_input_order(d.lab_other, tree);
+  out.chroma_iterated = to_input_order(d.chroma_iterated, tree);
+  out.chroma_other = to_input_order(d.chroma_other, tree);
   out.hue_difference = to_input_order(d.hue_difference, tree);
-  out.count_radius_dist = to_input_order(d.count_radius_dist, tree);
-  out.count_radius_ref = to_input_order(d.count_radius_ref, tree);
+  out.count_radius_other = to_input_order(d.count_radius_other, tree);
+  out.count_radius_iterated = to_input_order(d.count_radius_iterated, tree);
   out.underdetermined = to_input_order(d.underdetermined, tree);
   return out;
 }
@@ -453,41 +457,41 @@ double reference_max_dim(const std::vector<Vec3>& positions) {
   return std::max(x, std::max(y, z));
 }
 
-DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& dist,
+DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredCloud& other,
                                   const DirectionParams& params, const Lab2000hlTable& table) {
   const auto stage = [&](const char* what) {
     if (params.progress) params.progress->begin(params.label + ": " + what);
   };
   stage("search trees");
-  const bool same_positions = ref.positions == dist.positions;
-  const KdTree ref_tree(ref.positions, params.threads);
-  std::optional<KdTree> own_dist_tree;
-  if (!same_positions) own_dist_tree.emplace(dist.positions, params.threads);
-  const KdTree& dist_tree = same_positions ? ref_tree : *own_dist_tree;
+  const bool same_positions = iterated.positions == other.positions;
+  const KdTree iterated_tree(iterated.positions, params.threads);
+  std::optional<KdTree> own_other_tree;
+  if (!same_positions) own_other_tree.emplace(other.positions, params.threads);
+  const KdTree& other_tree = same_positions ? iterated_tree : *own_other_tree;
   DirectionParams p = params;
-  p.knn = std::min(params.knn, dist_tree.size());
+  p.knn = std::min(params.knn, other_tree.size());
   const Radii radii = radii_of(p);
-  const Clouds clouds{ref, dist, ref_tree, dist_tree, same_positions};
+  const Clouds clouds{iterated, other, iterated_tree, other_tree, same_positions};
 
   stage("curvatures and correspondences");
   PointData data = stage1(clouds, p, radii, table);
   DirectionOutput out;
   std::vector<std::uint32_t> counts;
-  if (p.diagnostics) counts.resize(ref_tree.size());
+  if (p.diagnostics) counts.resize(iterated_tree.size());
   stage("features");
-  out.features = stage2(ref_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
+  out.features = stage2(iterated_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
   out.pooled = mean_features_from_similarities(out.features);
   std::uint8_t too_common = 0;
   for (std::uint8_t kind : {kCurvatureFit, kMatchFit}) {
     std::size_t& count = kind == kCurvatureFit ? out.underdetermined_curvature
                                                : out.underdetermined_match;
     for (std::uint8_t u : data.underdetermined) count += (u & kind) != 0;
-    if (count > kUnderdeterminedShare * double(ref_tree.size())) too_common |= kind;
+    if (count > kUnderdeterminedShare * double(iterated_tree.size())) too_common |= kind;
   }
   if (too_common != 0) out.suggestion = suggest_settings(clouds, p, too_common);
   for (FeatureVector& f : out.features) similarities_to_features(f);
   if (p.diagnostics) {
-    out.diagnostics = diagnostics_of(data, ref_tree);
+    out.diagnostics = diagnostics_of(data, iterated_tree);
     out.diagnostics.count_statistics = std::move(counts);
   }
   return out;

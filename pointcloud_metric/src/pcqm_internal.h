@@ -32,13 +32,13 @@ inline constexpr int kProgressSteps = 3;
 /// Per-point intermediate values, in the iterated cloud's input order (SPEC-PCQM 1.4, 1.5).
 struct PointDiagnostics {
   std::vector<Vec3> correspondence;    ///< p-hat: foot point on D or nn_D(p)
-  std::vector<double> curvature_ref;   ///< k_R = |H| maxDim from R's points within r
-  std::vector<double> curvature_dist;  ///< k_D = |H| maxDim from D's points within r
-  std::vector<Lab> lab_ref;            ///< LAB2000HL of p's colour
-  std::vector<Lab> lab_dist;           ///< LAB2000HL of nn_D(p)'s colour
-  std::vector<double> chroma_ref, chroma_dist, hue_difference;
-  std::vector<std::uint32_t> count_radius_dist;  ///< #D points within r
-  std::vector<std::uint32_t> count_radius_ref;   ///< #R points within r
+  std::vector<double> curvature_iterated;   ///< k_R = |H| maxDim from R's points within r
+  std::vector<double> curvature_other;  ///< k_D = |H| maxDim from D's points within r
+  std::vector<Lab> lab_iterated;            ///< LAB2000HL of p's colour
+  std::vector<Lab> lab_other;           ///< LAB2000HL of nn_D(p)'s colour
+  std::vector<double> chroma_iterated, chroma_other, hue_difference;
+  std::vector<std::uint32_t> count_radius_other;  ///< #D points within r
+  std::vector<std::uint32_t> count_radius_iterated;   ///< #R points within r
   std::vector<std::uint32_t> count_statistics;   ///< #R points within radius_factor r
   /// Bits kCurvatureFit (k_D's or k_R's fit) and kMatchFit (p-hat's fit) when underdetermined.
   std::vector<std::uint8_t> underdetermined;
@@ -77,10 +77,11 @@ struct DirectionOutput {
 /// (PointSet.h `read_ply_file`). `positions` must not be empty.
 double reference_max_dim(const std::vector<Vec3>& positions);
 
-/// One direction of PCQM: iterates `ref`'s points, finds their correspondences on `dist`.
+/// One direction of PCQM: iterates `iterated`'s points (the reference's R in the reference
+/// tool's direction), finds their correspondences on `other` (its D).
 /// Both clouds must be non-empty with one colour per point (compute_pcqm checks this).
 /// Deterministic: bit-identical for any thread count.
-DirectionOutput compute_direction(const ColoredCloud& ref, const ColoredCloud& dist,
+DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredCloud& other,
                                   const DirectionParams& params, const Lab2000hlTable& table);
 
 }  // namespace qm3d::pointcloud::detail
