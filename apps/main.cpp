@@ -3,9 +3,6 @@
 #include <CLI/CLI.hpp>
 #include <omp.h>
 
-#include <fstream>
-#include <map>
-#include <set>
 #include <iostream>
 #include <sstream>
 
@@ -14,13 +11,13 @@
 #include "demo.h"
 #include "eval_commands.h"
 #include "merge_command.h"
+#include "metric_cli.h"
 #include "progress_display.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/common/model_io.h"
-#include "qm3d/common/version.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/common/version.h"
 #include "sample_commands.h"
 
 namespace qm3d::app {
@@ -32,9 +29,6 @@ constexpr int kExitUsage = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInternal = 3;
 
-constexpr const char* kModelHelp =
-    "Model file (JSON: metric, features, weights; e.g. written by qm3d train) used instead of the "
-    "built-in weights";
 
 struct OutputOptions {
   bool json = false;
@@ -79,182 +73,6 @@ void add_output_options(CLI::App* cmd, OutputOptions& o, bool with_map) {
                     "(positions, float 'distortion', heat-map colour; faces kept for meshes)")
         ->type_name("FILE.ply");
   }
-}
-
-// The values of the metrics' own options as given on the command line (before conversion).
-struct MetricOptionsCli {
-  std::map<std::string, std::string> text;  // name -> value as typed
-  std::map<std::string, bool> flags;        // boolean options
-  std::map<std::string, CLI::Option*> given;
-};
-
-// Adds --NAME for each option of `specs`, once per name (compare/batch take the options of every
-// metric; a value given applies to each metric that has an option of that name).
-// CLI11's check of a number option: its range, or its sign when the range is open-ended.
-CLI::Validator range_check(const OptionSpec& o) {
-  constexpr double kOpenEnded = 1e12;
-  if (o.max >= kOpenEnded && o.min == 0) {
-    return o.min_exclusive ? CLI::Validator(CLI::PositiveNumber)
-                           : CLI::Validator(CLI::NonNegativeNumber);
-  }
-  if (o.max >= kOpenEnded && o.min == 1 && o.default_value.is_number_integer()) {
-    return CLI::PositiveNumber;
-  }
-  if (o.default_value.is_number_integer()) {
-    return CLI::Range(static_cast<long long>(o.min), static_cast<long long>(o.max));
-  }
-  return CLI::Range(o.min, o.max);
-}
-
-// The help of an option: its metric's, or each metric's when several have an option of that
-// name with different help ("cmdm: ...; msdm2: ...").
-std::string option_help(const std::vector<const MetricSpec*>& specs, const std::string& name) {
-  std::vector<std::pair<std::string, std::string>> helps;
-  for (const MetricSpec* spec : specs) {
-    for (const OptionSpec& o : spec->options) {
-      if (o.name != name) continue;
-      const bool seen = std::any_of(helps.begin(), helps.end(),
-                                    [&](const auto& h) { return h.second == o.help; });
-      if (!seen) helps.emplace_back(spec->name, o.help);
-    }
-  }
-  if (helps.size() == 1) return helps.front().second;
-  std::string text;
-  for (const auto& [metric, help] : helps) text += (text.empty() ? "" : "; ") + metric + ": " + help;
-  return text;
-}
-
-void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& specs,
-                        MetricOptionsCli& cli) {
-  std::set<std::string> added;
-  for (const MetricSpec* spec : specs) {
-    for (const OptionSpec& o : spec->options) {
-      if (!added.insert(o.name).second) continue;
-      const std::string flag = "--" + o.name;
-      const std::string help = option_help(specs, o.name);
-      const nlohmann::json& d = o.default_value;
-      if (d.is_boolean()) {
-        cli.given[o.name] = cmd->add_flag(flag, cli.flags[o.name], help);
-        continue;
-      }
-      CLI::Option* opt = cmd->add_option(flag, cli.text[o.name], help);
-      if (d.is_array()) {
-        opt->type_name("LIST")->default_str(d.dump());
-      } else {
-        opt->default_str(d.is_string() ? d.get<std::string>() : d.dump());
-      }
-      if (!o.choices.empty()) opt->check(CLI::IsMember(o.choices));
-      if (d.is_number()) {
-        opt->type_name(d.is_number_integer() ? "INT" : "FLOAT");
-        opt->check(range_check(o));
-      }
-      cli.given[o.name] = opt;
-    }
-  }
-}
-
-// The options given, converted to their types (checked later against each metric's spec).
-OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
-                                  const MetricOptionsCli& cli) {
-  OptionValues values = OptionValues::object();
-  for (const MetricSpec* spec : specs) {
-    for (const OptionSpec& o : spec->options) {
-      const auto it = cli.given.find(o.name);
-      if (it == cli.given.end() || it->second->count() == 0 || values.contains(o.name)) continue;
-      const nlohmann::json& d = o.default_value;
-      if (d.is_boolean()) {
-        values[o.name] = cli.flags.at(o.name);
-        continue;
-      }
-      const std::string& text = cli.text.at(o.name);
-      const auto bad = [&] {
-        return std::invalid_argument("--" + o.name + ": '" + text + "' is not " +
-                                     (d.is_number_integer() ? "an integer"
-                                      : d.is_number()       ? "a number"
-                                                            : "a list of numbers"));
-      };
-      try {
-        std::size_t used = 0;
-        if (d.is_number_integer()) {
-          const long long v = std::stoll(text, &used);
-          if (used != text.size()) throw bad();
-          values[o.name] = v;
-        } else if (d.is_number()) {
-          const double v = std::stod(text, &used);
-          if (used != text.size()) throw bad();
-          values[o.name] = v;
-        } else if (d.is_array()) {
-          nlohmann::json list = nlohmann::json::array();
-          std::stringstream in(text);
-          std::string item;
-          while (std::getline(in, item, ',')) {
-            list.push_back(std::stod(item, &used));
-            if (used != item.size()) throw bad();
-          }
-          values[o.name] = list;
-        } else {
-          values[o.name] = text;
-        }
-      } catch (const std::logic_error&) {  // std::stod's invalid_argument / out_of_range
-        throw bad();
-      }
-    }
-  }
-  return values;
-}
-
-// --direction / --symmetric, --weights / --model: the run options every metric command has.
-struct RunCli {
-  std::string direction;
-  bool symmetric = false;
-  std::vector<double> weights;
-  std::string model_file;
-};
-
-void add_run_options(CLI::App* cmd, RunCli& r, const MetricSpec* spec) {
-  const std::string help =
-      spec ? spec->direction_help + " (default " + direction_name(spec->default_direction) + ")"
-           : "symmetric, dist-to-ref or ref-to-dist, for every metric (default: each metric's "
-             "own: CMDM symmetric, MSDM2 dist-to-ref, PCQM ref-to-dist)";
-  auto* direction = cmd->add_option("--direction", r.direction, help)
-                        ->check(CLI::IsMember({"symmetric", "dist-to-ref", "ref-to-dist"}));
-  cmd->add_flag("--symmetric", r.symmetric, "Same as --direction symmetric")->excludes(direction);
-  if (spec && !spec->takes_model) return;
-  CLI::Option* weights = nullptr;
-  if (spec) {
-    weights = cmd->add_option("--weights", r.weights,
-                                       "Weights of the 8 features replacing the published model")
-                           ->expected(8)
-                           ->delimiter(',');
-  }
-  auto* model = cmd->add_option("--model", r.model_file,
-                                spec ? std::string(kModelHelp)
-                                     : std::string(kModelHelp) +
-                                           "; applies to the metric the file names")
-                    ->type_name("MODEL.json");
-  if (weights) model->excludes(weights);
-}
-
-// The request of a metric command (`spec` set) or of compare / batch.
-ScoreRequest score_request(const GlobalOptions& g, const RunCli& r, const MetricSpec* spec) {
-  ScoreRequest req;
-  req.run.threads = g.threads;
-  req.run.data_dir = g.data_dir;
-  if (r.symmetric) req.run.direction = Direction::kSymmetric;
-  if (!r.direction.empty()) req.run.direction = parse_direction(r.direction);
-  if (!r.weights.empty()) {
-    LinearModel m;
-    m.metric = spec->model_name();
-    std::copy(r.weights.begin(), r.weights.end(), m.weights.begin());
-    m.provenance = "--weights";
-    req.model = m;
-    req.model_any_metric = true;
-  } else if (!r.model_file.empty()) {
-    const std::string metric = spec ? spec->model_name() : read_model(r.model_file).model.metric;
-    req.model = read_model_for(r.model_file, metric);
-    req.model_any_metric = spec != nullptr;
-  }
-  return req;
 }
 
 // Writes text to stdout or, atomically, to the requested file.
@@ -302,16 +120,10 @@ struct ScoreCli {
   OutputOptions out;
 };
 
-std::vector<const MetricSpec*> all_metrics() {
-  std::vector<const MetricSpec*> all;
-  for (const auto& m : registry().metrics()) all.push_back(&m);
-  return all;
-}
-
 int run_score_command(const ScoreCommand& c, ScoreCli& cli, const GlobalOptions& g) {
   const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
                                                       : all_metrics();
-  ScoreRequest request = score_request(g, cli.run, c.spec);
+  ScoreRequest request = score_request(cli.run, c.spec, g.threads, g.data_dir);
   request.options = metric_option_values(specs, cli.options);
   const Input ref = registry().read(cli.ref), dist = registry().read(cli.dist);
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
@@ -417,7 +229,7 @@ int run(int argc, char** argv) {
     batch.output = results;
     batch.threads = global.threads;
     batch.quiet = global.quiet;
-    batch.request = score_request(global, batch_run, nullptr);
+    batch.request = score_request(batch_run, nullptr, global.threads, global.data_dir);
     batch.request.options = metric_option_values(all_metrics(), batch_options);
     return run_batch(batch);
   }
