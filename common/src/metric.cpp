@@ -254,6 +254,15 @@ namespace {
 
 std::string value_text(const nlohmann::json& v) { return v.dump(); }
 
+// A bound as written in messages: 5, not 5.0.
+std::string bound_text(double x) {
+  constexpr double kExactIntegers = 9e15;
+  if (std::floor(x) == x && std::abs(x) < kExactIntegers) {
+    return std::to_string(static_cast<long long>(x));
+  }
+  return nlohmann::json(x).dump();
+}
+
 void check_value(const MetricSpec& spec, const OptionSpec& o, const nlohmann::json& v) {
   const auto bad = [&](const std::string& why) {
     throw std::invalid_argument(spec.name + ": option '" + o.name + "' " + why + " (got " +
@@ -265,9 +274,9 @@ void check_value(const MetricSpec& spec, const OptionSpec& o, const nlohmann::js
     const double n = x.get<double>();
     if (!std::isfinite(n)) bad("must be finite");
     if (n < o.min || (o.min_exclusive && n == o.min)) {
-      bad(std::string("must be ") + (o.min_exclusive ? "> " : ">= ") + value_text(o.min));
+      bad(std::string("must be ") + (o.min_exclusive ? "> " : ">= ") + bound_text(o.min));
     }
-    if (n > o.max) bad("must be <= " + value_text(o.max));
+    if (n > o.max) bad("must be <= " + bound_text(o.max));
   };
   if (d.is_boolean()) {
     if (!v.is_boolean()) bad("must be true or false");

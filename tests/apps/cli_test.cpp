@@ -371,5 +371,52 @@ TEST_F(Cli, BatchKilledMidRunResumesWithEveryPairOnce) {
   for (const auto& [pair, n] : rows) EXPECT_EQ(n, 1) << pair;
 }
 
+// --- inputs recognised by content, PCQM's directions ---------------------------------------------
+
+TEST_F(Cli, InputsAreRecognisedByContentNotExtension) {
+  // A PLY mesh with faces saved as .dat, an OFF mesh saved as .txt, a PLY cloud as .bin.
+  const fs::path mesh_ply = dir_ / "io" / "ref_mesh.dat", mesh_off = dir_ / "io" / "dist_mesh.txt";
+  const fs::path cloud = dir_ / "io" / "cloud.bin";
+  fs::copy_file(cmdm_file("blob4_ref.ply"), mesh_ply);
+  fs::copy_file(cmdm_file("blob4_colnoise.off"), mesh_off);
+  fs::copy_file(pcqm_file("sphere_50k_ref.ply"), cloud);
+  const CliRun renamed = qm3d("cmdm " + mesh_ply.string() + " " + mesh_off.string() + " --json");
+  ASSERT_EQ(renamed.code, 0) << renamed.err;
+  const CliRun named = qm3d("cmdm " + cmdm_file("blob4_ref.ply") + " " + cmdm_file("blob4_colnoise.off") + " --json");
+  ASSERT_EQ(named.code, 0) << named.err;
+  EXPECT_EQ(nlohmann::json::parse(renamed.out)["score"], nlohmann::json::parse(named.out)["score"]);
+  // compare sees two meshes (CMDM, MSDM2, both PCQMs) and, for a mesh and a cloud, PCQM only.
+  const CliRun both = qm3d("compare " + mesh_ply.string() + " " + mesh_off.string() + " --json --points 2000");
+  ASSERT_EQ(both.code, 0) << both.err;
+  EXPECT_EQ(nlohmann::json::parse(both.out)["metrics"].size(), 4u);
+  const CliRun mixed = qm3d("compare " + mesh_ply.string() + " " + cloud.string() + " --csv");
+  ASSERT_EQ(mixed.code, 0) << mixed.err;
+  EXPECT_NE(mixed.out.find(",pcqm,"), std::string::npos);
+  EXPECT_EQ(mixed.out.find(",cmdm,"), std::string::npos);
+  // A cloud given to a mesh metric: one clear line.
+  const CliRun cloud_as_mesh = qm3d("msdm2 " + cloud.string() + " " + cloud.string());
+  EXPECT_EQ(cloud_as_mesh.code, 2);
+  EXPECT_NE(cloud_as_mesh.err.find("no faces"), std::string::npos) << cloud_as_mesh.err;
+}
+
+TEST_F(Cli, PcqmComputesEitherDirectionOrBoth) {
+  const std::string pair = pcqm_file("sphere_50k_ref.ply") + " " + pcqm_file("sphere_50k_down0.5.ply");
+  const auto json_of = [&](const std::string& extra) {
+    const CliRun r = qm3d("pcqm " + pair + " --json --knn 10 " + extra);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto forward = json_of(""), backward = json_of("--direction dist-to-ref");
+  const auto both = json_of("--direction symmetric"), flag = json_of("--symmetric");
+  EXPECT_EQ(backward["options"]["direction"], "dist-to-ref");
+  EXPECT_FALSE(backward["directions"].contains("ref_to_dist"));
+  EXPECT_EQ(both["directions"]["ref_to_dist"]["score"], forward["score"]);
+  EXPECT_EQ(both["directions"]["dist_to_ref"]["score"], backward["score"]);
+  EXPECT_EQ(both["score"].get<double>(),
+            (forward["score"].get<double>() + backward["score"].get<double>()) / 2);
+  EXPECT_EQ(flag["score"], both["score"]);
+  EXPECT_EQ(both["options"]["symmetric"], true);
+}
+
 }  // namespace
 }  // namespace qm3d

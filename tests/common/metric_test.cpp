@@ -1,0 +1,188 @@
+// The metric registry's machinery (qm3d/common/metric.h) with metrics and inputs made here: format
+// recognition by content, option checking, applicability, and what run_metric adds.
+#include "qm3d/common/metric.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "qm3d/common/error.h"
+
+namespace qm3d {
+namespace {
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(DetectFormat, RecognisesEachFormatByContent) {
+  EXPECT_EQ(detect_format("ply\nformat ascii 1.0\n", "a"), FileFormat::kPly);
+  EXPECT_EQ(detect_format("ply\r\nformat ascii 1.0\r\n", "a"), FileFormat::kPly);
+  EXPECT_EQ(detect_format("OFF\n3 1 0\n", "a"), FileFormat::kOff);
+  EXPECT_EQ(detect_format("# comment\nCOFF\n3 1 0\n", "a"), FileFormat::kOff);
+  EXPECT_EQ(detect_format("NOFF 3 1 0\n", "a"), FileFormat::kOff);
+  EXPECT_EQ(detect_format("# .PCD v0.7\nVERSION 0.7\n", "a"), FileFormat::kPcd);
+  EXPECT_EQ(detect_format("VERSION .7\nFIELDS x y z\n", "a"), FileFormat::kPcd);
+  EXPECT_EQ(detect_format("# made by hand\nv 0 0 0\nv 1 0 0\n", "a"), FileFormat::kObj);
+  EXPECT_EQ(detect_format("mtllib a.mtl\n  v 0 0 0\n", "a"), FileFormat::kObj);
+  EXPECT_NE(error_of([] { detect_format("solid x\nfacet\n", "x.stl"); })
+                .find("x.stl: not a PLY, OBJ, OFF or PCD file"),
+            std::string::npos);
+  EXPECT_THROW(detect_format(std::string("v 0 0 0\0\1", 9), "bin"), FormatError);
+  EXPECT_THROW(detect_format("MOFF\n", "m"), FormatError);  // not an OFF keyword
+}
+
+TEST(DetectFormat, FilesFallBackToTheirExtensionOnlyWhenTheContentSaysNothing) {
+  const auto dir = std::filesystem::temp_directory_path() / "qm3d_detect_format";
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const char* name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return dir / name;
+  };
+  EXPECT_EQ(detect_format(write("cloud.dat", "ply\nformat ascii 1.0\nend_header\n")),
+            FileFormat::kPly);
+  EXPECT_EQ(detect_format(write("mesh.ply", "OFF\n3 1 0\n")), FileFormat::kOff);
+  EXPECT_EQ(detect_format(write("empty.off", "")), FileFormat::kOff);  // the OFF reader says why
+  EXPECT_NE(error_of([&] { detect_format(write("x.stl", "solid x\n")); })
+                .find("unknown format '.stl'"),
+            std::string::npos);
+  EXPECT_THROW(detect_format(dir / "missing.ply"), InputError);
+  EXPECT_THROW(detect_format(dir), InputError);
+  std::filesystem::remove_all(dir);
+}
+
+// A metric made here: the score is the difference of the first coordinates' sums.
+MetricSpec toy_metric(const std::string& name, AppliesTo applies) {
+  MetricSpec s;
+  s.name = name;
+  s.title = name;
+  s.applies_to = applies;
+  s.reads = Input::Kind::kCloud;
+  s.default_direction = Direction::kRefToDist;
+  s.options = {{"scale", "a factor", 1.0, {}, 0, 10, true},
+               {"count", "an integer", 3, {}, 1, 5},
+               {"mode", "a choice", "a", {"a", "b"}},
+               {"flag", "a flag", false, {}},
+               {"weights", "three numbers", {1.0, 2.0, 3.0}, {}}};
+  s.run = [](const MetricSpec& spec, const Input& ref, const Input& dist, const RunOptions&,
+             const OptionValues& v) {
+    double a = 0, b = 0;
+    for (const auto& p : ref.cloud().positions) a += p[0];
+    for (const auto& p : dist.cloud().positions) b += p[0];
+    if (v.at("mode") == "b") throw NumericError("mode b cannot be computed");
+    MetricResult r;
+    r.metric = spec.name;
+    r.ref_to_dist = DirectionResult{v.at("scale").get<double>() * (b - a), {}, 1, {}};
+    combine_directions(r);
+    return r;
+  };
+  return s;
+}
+
+ColoredCloud cloud_of(std::initializer_list<double> xs) {
+  ColoredCloud c;
+  for (double x : xs) {
+    c.positions.push_back({x, 0, 0});
+    c.colors.push_back({0.5, 0.5, 0.5});
+  }
+  return c;
+}
+
+ColoredMesh triangle() {
+  return ColoredMesh{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+                     {{0, 1, 2}}};
+}
+
+TEST(MetricSpec, CompleteFillsDefaultsAndRejectsWhatDoesNotFit) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const OptionValues d = s.complete({});
+  EXPECT_EQ(d.at("scale"), 1.0);
+  EXPECT_EQ(d.at("count"), 3);
+  EXPECT_EQ(d.at("mode"), "a");
+  EXPECT_EQ(d.at("flag"), false);
+  EXPECT_EQ(s.complete({{"count", 5}, {"mode", "b"}}).at("count"), 5);
+  const auto rejected = [&](const OptionValues& v, const std::string& what) {
+    const std::string e = error_of([&] { s.complete(v); });
+    EXPECT_NE(e.find(what), std::string::npos) << e;
+  };
+  rejected({{"nope", 1}}, "toy: unknown option 'nope' (known: scale, count, mode, flag, weights)");
+  rejected({{"count", 6}}, "option 'count' must be <= 5 (got 6)");
+  rejected({{"count", 2.5}}, "option 'count' must be an integer");
+  rejected({{"scale", 0.0}}, "option 'scale' must be > 0");
+  rejected({{"scale", "x"}}, "must be a number");
+  rejected({{"mode", "c"}}, "must be one of a, b");
+  rejected({{"flag", 1}}, "must be true or false");
+  rejected({{"weights", {1.0, 2.0}}}, "must be a list of 3 numbers");
+  EXPECT_THROW(s.complete(nlohmann::json::array()), std::invalid_argument);
+}
+
+TEST(Registry, FindsAppliesAndChoosesInRegistrationOrder) {
+  Registry reg;
+  reg.add(toy_metric("meshes_only", AppliesTo::kMeshes));
+  reg.add(toy_metric("anything", AppliesTo::kBoth));
+  reg.add(toy_metric("clouds_only", AppliesTo::kClouds));
+  EXPECT_THROW(reg.add(toy_metric("anything", AppliesTo::kBoth)), std::logic_error);
+  EXPECT_EQ(reg.find("nope"), nullptr);
+  EXPECT_NE(error_of([&] { reg.get("nope"); })
+                .find("unknown metric 'nope' (expected meshes_only, anything, clouds_only)"),
+            std::string::npos);
+  const Input m1 = Input::from_mesh(triangle(), "m1"), m2 = Input::from_mesh(triangle(), "m2");
+  const Input c1 = Input::from_cloud(cloud_of({0}), "c1"), c2 = Input::from_cloud(cloud_of({1}), "c2");
+  const auto names = [&](const Input& a, const Input& b) {
+    std::string out;
+    for (const MetricSpec* m : reg.applicable(a, b)) out += m->name + " ";
+    return out;
+  };
+  EXPECT_EQ(names(m1, m2), "meshes_only anything ");
+  EXPECT_EQ(names(c1, c2), "anything clouds_only ");
+  EXPECT_EQ(names(m1, c2), "anything ");
+  EXPECT_EQ(reg.auto_metric(m1, m2).name, "meshes_only");
+  EXPECT_EQ(reg.auto_metric(c1, m2).name, "anything");
+  EXPECT_THROW(reg.sampler(), std::logic_error);
+}
+
+TEST(Input, InMemoryMeshesAreAlsoClouds) {
+  const Input m = Input::from_mesh(triangle(), "tri");
+  EXPECT_TRUE(m.is_mesh());
+  EXPECT_EQ(m.cloud().positions, triangle().positions);
+  EXPECT_EQ(m.mesh().mesh.triangles.size(), 1u);
+  const Input c = Input::from_cloud(cloud_of({0, 1}), "pts");
+  EXPECT_FALSE(c.is_mesh());
+  EXPECT_NE(error_of([&] { c.mesh(); }).find("pts: a point cloud (no faces), not a mesh"),
+            std::string::npos);
+}
+
+TEST(RunMetric, ChecksOptionsFillsProvenanceAndNamesTheInputsInErrors) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");
+  const Input b = Input::from_cloud(cloud_of({2, 3}), "b.ply");
+  RunOptions run;
+  const MetricResult r = run_metric(s, a, b, run, {{"scale", 0.5}});
+  EXPECT_EQ(r.score, 2.0);
+  EXPECT_EQ(r.provenance.reference, "a.ply");
+  EXPECT_EQ(r.provenance.distorted, "b.ply");
+  EXPECT_FALSE(r.provenance.version.empty());
+  EXPECT_GE(r.provenance.seconds, 0.0);
+  EXPECT_THROW(run_metric(s, a, b, run, {{"scale", -1.0}}), std::invalid_argument);
+  const std::string e = error_of([&] { run_metric(s, a, b, run, {{"mode", "b"}}); });
+  EXPECT_NE(e.find("mode b cannot be computed (reference a.ply, distorted b.ply)"),
+            std::string::npos)
+      << e;
+  run.model = LinearModel{"toy", {}, "test"};
+  EXPECT_THROW(run_metric(s, a, b, run), std::invalid_argument);  // the toy takes no model
+}
+
+TEST(OptionsFor, KeepsTheNamesTheMetricKnows) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const OptionValues all = {{"count", 2}, {"radius", 0.1}, {"mode", "b"}};
+  EXPECT_EQ(options_for(s, all), (OptionValues{{"count", 2}, {"mode", "b"}}));
+}
+
+}  // namespace
+}  // namespace qm3d
