@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "batch.h"
@@ -106,12 +107,8 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
   return out.str();
 }
 
-// One command per registered metric, plus compare: REF DIST, the metric's options, output.
-struct ScoreCommand {
-  const MetricSpec* spec = nullptr;  // nullptr: compare
-  CLI::App* cmd = nullptr;
-};
-
+// What one scoring command parses into (each command has its own: CLI11 options are bound to
+// their variables, and a value given to one command must not be read through another's option).
 struct ScoreCli {
   std::string ref, dist;
   bool progress = false;
@@ -120,7 +117,15 @@ struct ScoreCli {
   OutputOptions out;
 };
 
-int run_score_command(const ScoreCommand& c, ScoreCli& cli, const GlobalOptions& g) {
+// One command per registered metric, plus compare: REF DIST, the metric's options, output.
+struct ScoreCommand {
+  const MetricSpec* spec = nullptr;  // nullptr: compare
+  CLI::App* cmd = nullptr;
+  std::unique_ptr<ScoreCli> cli = std::make_unique<ScoreCli>();
+};
+
+int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
+  const ScoreCli& cli = *c.cli;
   const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
                                                       : all_metrics();
   ScoreRequest request = score_request(cli.run, c.spec, g.threads, g.data_dir);
@@ -151,7 +156,6 @@ int run(int argc, char** argv) {
   add_global_options(&app, global);
 
   // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
-  ScoreCli score_cli;
   std::vector<ScoreCommand> score_commands;
   for (const MetricSpec& spec : registry().metrics()) {
     score_commands.push_back({&spec, app.add_subcommand(spec.name, spec.summary)});
@@ -162,14 +166,15 @@ int run(int argc, char** argv) {
                                    "and PCQM on surface samples (pcqm_sampled; both meshes "
                                    "sampled alike) for two meshes, PCQM for two clouds")});
   for (const ScoreCommand& c : score_commands) {
+    ScoreCli& cli = *c.cli;
     add_global_options(c.cmd, global);
-    add_progress_flag(c.cmd, score_cli.progress);
-    c.cmd->add_option("REF", score_cli.ref, "Reference")->required();
-    c.cmd->add_option("DIST", score_cli.dist, "Distorted")->required();
-    add_run_options(c.cmd, score_cli.run, c.spec);
+    add_progress_flag(c.cmd, cli.progress);
+    c.cmd->add_option("REF", cli.ref, "Reference")->required();
+    c.cmd->add_option("DIST", cli.dist, "Distorted")->required();
+    add_run_options(c.cmd, cli.run, c.spec);
     add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
-                       score_cli.options);
-    add_output_options(c.cmd, score_cli.out, c.spec && c.spec->per_element_on_input);
+                       cli.options);
+    add_output_options(c.cmd, cli.out, c.spec && c.spec->per_element_on_input);
   }
 
   BatchOptions batch;
@@ -222,7 +227,7 @@ int run(int argc, char** argv) {
   if (const auto code = run_sample_commands(*sample_commands)) return *code;
   if (const auto code = run_merge_command(*merge_command, global.quiet)) return *code;
   for (const ScoreCommand& c : score_commands) {
-    if (*c.cmd) return run_score_command(c, score_cli, global);
+    if (*c.cmd) return run_score_command(c, global);
   }
   if (*batch_cmd) {
     batch.list = list;

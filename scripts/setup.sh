@@ -20,6 +20,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   python3 python3-numpy time
+  pybind11-dev python3-dev python3-pytest python3-pandas python3-open3d python3-distributed
   gnuplot-nox
   slurm-wlm munge
 )
@@ -73,6 +74,21 @@ build() {
   cmake --build "$BUILD_DIR" -j "$JOBS"
 }
 
+# The Python package: installed for Debian's python3 (/usr/local/lib/python3.X/dist-packages)
+# when run as root; otherwise the PYTHONPATH line to use it from the build tree.
+install_python() {
+  if [ ! -d "$BUILD_DIR/python/qm3d" ]; then
+    log "the Python package was not built (pybind11-dev / python3-dev missing?)"
+    return
+  fi
+  if [ "$(id -u)" -eq 0 ] && [ -z "${QM3D_SKIP_PYTHON_INSTALL:-}" ]; then
+    cmake --install "$BUILD_DIR" --component python >/dev/null
+    log "Python package installed: /usr/bin/python3 -c 'import qm3d' works"
+  else
+    log "Python package built; use it with: export PYTHONPATH=$BUILD_DIR/python"
+  fi
+}
+
 run_demo() {
   if [ -x "$BUILD_DIR/apps/qm3d" ]; then
     log "demo: qm3d demo"
@@ -85,5 +101,6 @@ run_demo() {
 install_packages
 TABLES="$(find_tables)"
 build "$TABLES"
+install_python
 run_demo
 log "done. Run scripts/test.sh to run the test suite."

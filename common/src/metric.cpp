@@ -179,11 +179,15 @@ Input Input::from_file(const std::filesystem::path& path, const Registry& regist
 }
 
 Input Input::from_mesh(ColoredMesh mesh, std::string name, bool has_colors) {
+  return from_mesh(MeshData{std::move(mesh), has_colors, {}}, std::move(name));
+}
+
+Input Input::from_mesh(MeshData mesh, std::string name) {
   Input in;
   in.state_ = std::make_shared<State>();
   in.state_->name = std::move(name);
   in.state_->kind = Kind::kMesh;
-  in.state_->mesh = MeshData{std::move(mesh), has_colors, {}};
+  in.state_->mesh = std::move(mesh);
   return in;
 }
 

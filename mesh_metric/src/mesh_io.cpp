@@ -372,6 +372,38 @@ MeshFile read_mesh(const std::filesystem::path& path, MeshFormat format,
   return parse_mesh(bytes, format, path.string(), options);
 }
 
+MeshFile mesh_from_arrays(std::vector<Vec3> positions, std::vector<Rgb> colors,
+                          std::vector<Triangle> triangles, const std::string& name) {
+  if (positions.empty()) fail(name, "no vertices");
+  if (triangles.empty()) fail(name, "no faces (a point cloud? score it with PCQM)");
+  if (!colors.empty() && colors.size() != positions.size()) {
+    fail(name, std::to_string(positions.size()) + " vertices but " +
+                   std::to_string(colors.size()) + " colours");
+  }
+  for (std::size_t i = 0; i < positions.size(); ++i) check_finite(positions[i], i, name);
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    for (const std::uint32_t v : triangles[f]) {
+      if (v >= positions.size()) {
+        fail(name, "face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                       ", but there are " + std::to_string(positions.size()) + " vertices");
+      }
+    }
+  }
+  for (std::size_t i = 0; i < colors.size(); ++i) {
+    for (double* c : {&colors[i].r, &colors[i].g, &colors[i].b}) {
+      if (!(*c >= 0.0 && *c <= 1.0)) {
+        fail(name, "vertex " + std::to_string(i) + " has colour value " + std::to_string(*c) +
+                       " outside [0, 1]");
+      }
+      *c = to_float_precision(*c);
+    }
+  }
+  MeshFile out;
+  out.mesh = ColoredMesh{std::move(positions), std::move(colors), std::move(triangles)};
+  drop_unreferenced(out, name);
+  return out;
+}
+
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
   return read_mesh_vertices(path, format_of(path));
 }

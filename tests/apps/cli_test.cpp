@@ -418,5 +418,35 @@ TEST_F(Cli, PcqmComputesEitherDirectionOrBoth) {
   EXPECT_EQ(both["options"]["symmetric"], true);
 }
 
+// Every option given on the command line reaches its metric (the JSON echoes what was used), on
+// each metric's own command and on compare.
+TEST_F(Cli, EveryMetricOptionReachesItsMetric) {
+  const std::string meshes = cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_colnoise.off");
+  const auto options_of = [&](const std::string& args) {
+    const CliRun r = qm3d(args + " --json --quiet");
+    EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+    return nlohmann::json::parse(r.out.empty() ? "{}" : r.out);
+  };
+  EXPECT_EQ(options_of("cmdm " + meshes + " --scales 2")["options"]["scales"], 2);
+  EXPECT_EQ(options_of("msdm2 " + meshes + " --scales 2")["options"]["scales"], 2);
+  const auto p = options_of("pcqm " + meshes + " --knn 7 --radius 0.01 --rx 3 --bbox extent")["options"];
+  EXPECT_EQ(p["knn"], 7);
+  EXPECT_EQ(p["radius"], 0.01);
+  EXPECT_EQ(p["rx"], 3.0);
+  EXPECT_EQ(p["bbox"], "extent");
+  const auto s = options_of("pcqm_sampled " + meshes + " --points 1500 --seed 3 --knn 9")["options"];
+  EXPECT_EQ(s["sampling"]["points"], 1500);
+  EXPECT_EQ(s["sampling"]["seed"], 3);
+  EXPECT_EQ(s["knn"], 9);
+  const auto c = options_of("compare " + meshes + " --scales 2 --knn 7 --points 1000")["metrics"];
+  EXPECT_EQ(c["cmdm"]["options"]["scales"], 2);
+  EXPECT_EQ(c["msdm2"]["options"]["scales"], 2);
+  EXPECT_EQ(c["pcqm"]["options"]["knn"], 7);
+  EXPECT_EQ(c["pcqm_sampled"]["options"]["knn"], 7);
+  EXPECT_EQ(c["pcqm_sampled"]["options"]["sampling"]["points"], 1000);
+  EXPECT_EQ(c["pcqm"]["options"]["direction"], "ref-to-dist");  // each metric's own default
+  EXPECT_EQ(c["cmdm"]["options"]["direction"], "symmetric");
+}
+
 }  // namespace
 }  // namespace qm3d

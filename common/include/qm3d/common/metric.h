@@ -65,6 +65,8 @@ class Input {
   static Input from_file(const std::filesystem::path& path, const Registry& registry);
   /// A mesh in memory (`name` appears in results and messages).
   static Input from_mesh(ColoredMesh mesh, std::string name, bool has_colors = true);
+  /// A mesh in memory with its reader's warnings (e.g. mesh/mesh_io.h mesh_from_arrays).
+  static Input from_mesh(MeshData mesh, std::string name);
   /// A cloud in memory.
   static Input from_cloud(ColoredCloud cloud, std::string name);
 

@@ -52,6 +52,13 @@ MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::stri
 /// Used to read a mesh as a point cloud.
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path);
 
+/// A mesh given as arrays (e.g. from Python), made what read_mesh would have made of a file
+/// holding them: indices checked, colours (empty = none; else one per vertex in [0, 1]) kept at
+/// float precision, vertices no face uses dropped (with a warning). `name` names the mesh in
+/// errors. FormatError for bad indices or colours, NumericError for non-finite coordinates.
+MeshFile mesh_from_arrays(std::vector<Vec3> positions, std::vector<Rgb> colors,
+                          std::vector<Triangle> triangles, const std::string& name);
+
 /// read_mesh and read_mesh_vertices with the format given (e.g. recognised by content,
 /// qm3d/common/metric.h) instead of taken from the extension.
 MeshFile read_mesh(const std::filesystem::path& path, MeshFormat format,

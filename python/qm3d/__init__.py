@@ -1,0 +1,456 @@
+"""qm3d: visual quality metrics for coloured 3D content, from Python.
+
+CMDM and MSDM2 score coloured meshes, PCQM coloured point clouds, with the exact numbers of the
+``qm3d`` command-line tool (the same C++ library). Scores are distortions: 0 means identical,
+larger is worse.
+
+Every metric function takes a reference and a distorted object, each given as
+
+* a file path (PLY, OBJ, OFF, PCD; recognised by content, as the tool does),
+* numpy arrays: ``(positions, colors)`` for a cloud or ``(positions, colors, faces)`` for a mesh,
+  as a tuple or a dict with those keys; positions ``(N, 3)`` float, colours ``(N, 3)`` uint8 0-255
+  or float 0-1, faces ``(F, 3)`` integer vertex indices,
+* an Open3D ``PointCloud`` or ``TriangleMesh`` (with colours),
+
+and the tool's options as keyword arguments with the tool's names and defaults. Example::
+
+    import qm3d
+    r = qm3d.pcqm("ref.ply", "dist.ply")
+    print(r.score, r.features["F4"])
+
+The metrics release the GIL: threads (e.g. a ``concurrent.futures.ThreadPoolExecutor``) score
+pairs concurrently; ``threads=`` sets the OpenMP threads of one metric as ``--threads`` does.
+Results do not depend on the thread count.
+"""
+
+import inspect as _inspect
+import json as _json
+import os as _os
+
+import numpy as _np
+
+from . import _qm3d
+
+__version__ = _qm3d.__version__
+
+InputError = _qm3d.InputError
+"""A file cannot be found or read (a subclass of OSError)."""
+FormatError = _qm3d.FormatError
+"""A file or an array holds something malformed (a subclass of ValueError)."""
+NumericError = _qm3d.NumericError
+"""Well-formed input the metric cannot score, e.g. a zero-size bounding box (a ValueError)."""
+
+__all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample",
+           "read_mesh", "read_cloud", "evaluate", "load_model", "Result", "Direction",
+           "InputError", "FormatError", "NumericError"]
+
+
+# ---- inputs --------------------------------------------------------------------------------
+
+def _looks_like_open3d_mesh(obj):
+    return hasattr(obj, "vertices") and hasattr(obj, "triangles") and hasattr(obj, "vertex_colors")
+
+
+def _looks_like_open3d_cloud(obj):
+    return hasattr(obj, "points") and hasattr(obj, "colors") and not hasattr(obj, "triangles")
+
+
+def _arrays_of(obj, argument):
+    """(positions, colors, faces, name) of an in-memory object; faces may be None."""
+    if _looks_like_open3d_mesh(obj):
+        if not obj.has_vertex_colors():
+            raise ValueError(f"{argument}: the Open3D TriangleMesh has no vertex colours")
+        return (_np.asarray(obj.vertices), _np.asarray(obj.vertex_colors),
+                _np.asarray(obj.triangles), f"<{argument}: Open3D TriangleMesh>")
+    if _looks_like_open3d_cloud(obj):
+        if not obj.has_colors():
+            raise ValueError(f"{argument}: the Open3D PointCloud has no colours")
+        return (_np.asarray(obj.points), _np.asarray(obj.colors), None,
+                f"<{argument}: Open3D PointCloud>")
+    if isinstance(obj, dict):
+        unknown = set(obj) - {"positions", "colors", "faces", "warnings"}  # read_mesh()'s dict
+        if unknown or "positions" not in obj:
+            raise ValueError(f"{argument}: a dict needs 'positions', 'colors' and optionally "
+                             f"'faces' (got keys {sorted(obj)})")
+        return (obj["positions"], obj.get("colors"), obj.get("faces"), f"<{argument}: arrays>")
+    if isinstance(obj, (tuple, list)) and len(obj) in (2, 3):
+        faces = obj[2] if len(obj) == 3 else None
+        return obj[0], obj[1], faces, f"<{argument}: arrays>"
+    raise TypeError(f"{argument}: expected a file path, (positions, colors[, faces]) arrays, a dict "
+                    f"of them, or an Open3D PointCloud / TriangleMesh; got {type(obj).__name__}")
+
+
+def _array(value, argument, name):
+    if value is None:
+        return None
+    try:
+        return _np.asarray(value)
+    except Exception as e:  # ragged lists and the like
+        raise ValueError(f"{argument}: {name}: not an array ({e})") from None
+
+
+class _Inputs:
+    """The inputs of one call, built once per way a metric reads them (mesh or cloud)."""
+
+    def __init__(self, obj, argument):
+        self._obj, self._argument, self._made = obj, argument, {}
+        if isinstance(obj, (str, bytes, _os.PathLike)):
+            self._file = _qm3d.Input.from_file(_os.fsdecode(obj))
+            self.kind = self._file.kind
+        else:
+            p, c, f, name = _arrays_of(obj, argument)
+            self._arrays = (_array(p, argument, "positions"), _array(c, argument, "colors"),
+                            _array(f, argument, "faces"), name)
+            self._file = None
+            self.kind = "mesh" if self._arrays[2] is not None else "cloud"
+
+    def get(self, reads):
+        if self._file is not None:
+            return self._file
+        if reads not in self._made:
+            p, c, f, name = self._arrays
+            try:
+                self._made[reads] = _qm3d.Input.from_arrays(p, c, f, name, reads == "mesh")
+            except ValueError as e:
+                if isinstance(e, (_qm3d.FormatError, _qm3d.NumericError)):
+                    raise
+                raise ValueError(f"{self._argument}: {e}") from None
+        return self._made[reads]
+
+    def any(self):
+        return self.get(self.kind)
+
+
+# ---- results -------------------------------------------------------------------------------
+
+class Direction:
+    """One direction of a metric: which object's elements were iterated.
+
+    Attributes:
+        score: the direction's pooled score.
+        features: dict of the pooled features ("f1".."f8" for CMDM/MSDM2, "F1".."F8" for PCQM).
+        box_size: the bounding-box size that scales the metric's radii, in the object's units.
+        per_element: numpy float64 array, the local distortion of each vertex / point of the
+            iterated object (its input order), or None unless ``per_element=True`` was asked.
+    """
+
+    def __init__(self, d, names):
+        self.score = d.score
+        self.features = dict(zip(names, d.feature_values))
+        self.box_size = d.box_size
+        self.per_element = d.per_element
+
+    def __repr__(self):
+        return f"Direction(score={self.score!r})"
+
+
+class Result:
+    """The result of one metric on one pair.
+
+    Attributes:
+        metric: "cmdm", "msdm2", "pcqm", ...
+        score: the requested direction's score, or the mean of both (symmetric).
+        dist_to_ref / ref_to_dist: a Direction, or None when not computed.
+        directions: dict of the computed directions by name.
+        features: the features of the single computed direction (None when both were computed).
+        box_size, per_element: likewise, of the single computed direction.
+        warnings: list of str (repairs made to the inputs, caveats), as the tool prints them.
+        seconds: wall time of the computation.
+    """
+
+    def __init__(self, r):
+        self._r = r
+        self.metric = r.metric
+        self.score = r.score
+        names = list(r.feature_names)
+        self.dist_to_ref = Direction(r.dist_to_ref, names) if r.dist_to_ref is not None else None
+        self.ref_to_dist = Direction(r.ref_to_dist, names) if r.ref_to_dist is not None else None
+        self.directions = {k: v for k, v in (("dist_to_ref", self.dist_to_ref),
+                                             ("ref_to_dist", self.ref_to_dist)) if v is not None}
+        single = next(iter(self.directions.values())) if len(self.directions) == 1 else None
+        self.features = single.features if single else None
+        self.box_size = single.box_size if single else None
+        self.per_element = single.per_element if single else None
+        self.warnings = list(r.warnings)
+        self.seconds = r.seconds
+
+    def to_dict(self):
+        """The object ``qm3d <metric> --json`` writes for this result."""
+        return _json.loads(self._r.to_json())
+
+    def csv_row(self):
+        """The row ``qm3d <metric> --csv`` (and ``batch``) writes for this result."""
+        return self._r.csv_row()
+
+    def __repr__(self):
+        return f"Result(metric={self.metric!r}, score={self.score!r})"
+
+
+# ---- metrics -------------------------------------------------------------------------------
+
+_SPECS = {}
+for _s in _qm3d.metrics():
+    for _o in _s["options"]:
+        _o["default"] = _json.loads(_o["default"])
+    _SPECS[_s["name"]] = _s
+
+_RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
+                 "progress")
+
+
+def metrics():
+    """Every metric qm3d has, as dicts: name, title, summary, applies_to ("meshes", "clouds",
+    "both"), reads ("mesh" or "cloud"), default_direction, takes_model and options (each with
+    name, help, default, choices, min, max)."""
+    return [dict(s) for s in _SPECS.values()]
+
+
+def _option_value(spec, option, value):
+    default = option["default"]
+    name = f"{spec['name']}: {option['name']}"
+    if isinstance(default, bool):
+        if not isinstance(value, (bool, _np.bool_)):
+            raise ValueError(f"{name}: expected True or False, got {value!r}")
+        return bool(value)
+    if isinstance(default, int):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if not isinstance(value, (int, _np.integer)) or isinstance(value, bool):
+            raise ValueError(f"{name}: expected an integer, got {value!r}")
+        return int(value)
+    if isinstance(default, float):
+        if not isinstance(value, (int, float, _np.integer, _np.floating)) or isinstance(value, bool):
+            raise ValueError(f"{name}: expected a number, got {value!r}")
+        return float(value)
+    if isinstance(default, list):
+        return [float(v) for v in value]
+    return value
+
+
+def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None):
+    spec = _SPECS[name]
+    known = {o["name"]: o for o in spec["options"]}
+    options = {}
+    run = dict(direction=None, threads=0, per_element=False, data_dir=None, weights=None,
+               model=None, progress=None)
+    for key, value in kwargs.items():
+        if key in run:
+            run[key] = value
+        elif key in known:
+            options[key] = _option_value(spec, known[key], value)
+        else:
+            raise TypeError(f"{name}() got an unexpected keyword argument {key!r} (options: "
+                            f"{', '.join(list(known) + list(_RUN_KEYWORDS))})")
+    if run["direction"] is not None and run["direction"] not in (
+            "symmetric", "dist-to-ref", "ref-to-dist"):
+        raise ValueError(f"direction: expected 'symmetric', 'dist-to-ref' or 'ref-to-dist', got "
+                         f"{run['direction']!r}")
+    if run["model"] is not None and run["weights"] is not None:
+        raise ValueError("give weights or model, not both")
+    model_path = None
+    if run["model"] is not None:
+        model = run["model"]
+        if isinstance(model, dict):
+            if model.get("metric") != spec["model_metric"]:
+                raise ValueError(f"model: a {model.get('metric')!r} model, not a "
+                                 f"{spec['model_metric']!r} one")
+            run["weights"] = model_weights(model)
+        else:
+            model_path = _os.fsdecode(model)
+    weights = None if run["weights"] is None else [float(w) for w in run["weights"]]
+    ref_inputs = ref_inputs or _Inputs(reference, "reference")
+    dist_inputs = dist_inputs or _Inputs(distorted, "distorted")
+    result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
+                       _json.dumps(options), run["direction"], int(run["threads"]),
+                       bool(run["per_element"]),
+                       "" if run["data_dir"] is None else _os.fsdecode(run["data_dir"]),
+                       weights, model_path, run["progress"])
+    return Result(result)
+
+
+def metric(name, reference, distorted, **options):
+    """Runs the metric called `name` (see metrics()) on a pair; keyword arguments as for the
+    metric's own function."""
+    if name not in _SPECS:
+        raise ValueError(f"unknown metric {name!r} (expected {', '.join(_SPECS)})")
+    return _run(name, reference, distorted, options)
+
+
+_COMMON_DOC = """
+    Args:
+        reference, distorted: a file path; (positions, colors[, faces]) numpy arrays or a dict
+            of them (positions (N, 3) float in the object's units; colors (N, 3) uint8 0-255 or
+            float 0-1; faces (F, 3) integer vertex indices); or an Open3D PointCloud /
+            TriangleMesh with colours.
+        direction: "symmetric", "dist-to-ref" or "ref-to-dist" (default: {default}). {dhelp}
+        threads: OpenMP threads (0 = all cores), as --threads; results do not depend on it.
+        per_element: keep the per-vertex / per-point local distortion as numpy arrays.
+        data_dir: folder of the LAB2000HL tables (default: $QM3D_DATA_DIR, else the built-in).
+{model}        progress: optional callable(stage: str, fraction: float), told each stage.
+{options}
+    Returns:
+        Result (score, directions with features, box size and optional per-element values,
+        warnings, to_dict() = the tool's --json object).
+
+    Raises:
+        InputError (an OSError) for a file that cannot be read; FormatError / ValueError for
+        malformed files or arrays (naming the argument); NumericError for input the metric
+        cannot score.
+"""
+
+
+def _make_metric_function(spec):
+    name = spec["name"]
+
+    def function(reference, distorted, **options):
+        return _run(name, reference, distorted, options)
+
+    params = [_inspect.Parameter("reference", _inspect.Parameter.POSITIONAL_OR_KEYWORD),
+              _inspect.Parameter("distorted", _inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+    kw = _inspect.Parameter.KEYWORD_ONLY
+    params += [_inspect.Parameter("direction", kw, default=None),
+               _inspect.Parameter("threads", kw, default=0),
+               _inspect.Parameter("per_element", kw, default=False),
+               _inspect.Parameter("data_dir", kw, default=None)]
+    if spec["takes_model"]:
+        params += [_inspect.Parameter("weights", kw, default=None),
+                   _inspect.Parameter("model", kw, default=None)]
+    params.append(_inspect.Parameter("progress", kw, default=None))
+    params += [_inspect.Parameter(o["name"], kw, default=o["default"]) for o in spec["options"]]
+    function.__signature__ = _inspect.Signature(params)
+    function.__name__ = function.__qualname__ = name
+    model_doc = ("        weights: 8 weights of the features replacing the published model.\n"
+                 "        model: a model file (qm3d train) or a dict from load_model().\n"
+                 if spec["takes_model"] else "")
+    option_doc = "".join(f"        {o['name']}: {o['help']} (default {o['default']!r}).\n"
+                         for o in spec["options"])
+    function.__doc__ = spec["summary"] + "." + _COMMON_DOC.format(
+        default=spec["default_direction"], dhelp=spec["direction_help"], model=model_doc,
+        options=option_doc)
+    return function
+
+
+for _name, _spec in _SPECS.items():
+    globals()[_name] = _make_metric_function(_spec)
+
+
+def compare(reference, distorted, **options):
+    """Every metric that applies to the pair (as ``qm3d compare``): CMDM, MSDM2, PCQM and
+    pcqm_sampled for two meshes, PCQM otherwise. Keyword arguments go to every metric that has
+    them (e.g. scales=, radius=, points=); run options (direction, threads, per_element,
+    data_dir, progress) to all; ``model`` (a file) applies to the metric it names.
+
+    Returns:
+        dict metric name -> Result, in the tool's order.
+    """
+    if "weights" in options:
+        raise TypeError("compare(): weights apply to one metric; give model= (a model file "
+                        "names its metric) or call the metric")
+    ref_inputs, dist_inputs = _Inputs(reference, "reference"), _Inputs(distorted, "distorted")
+    names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
+    model = options.get("model")
+    model_metric = None
+    if model is not None:
+        model_metric = (model if isinstance(model, dict) else load_model(model))["metric"]
+    out = {}
+    for name in names:
+        spec = _SPECS[name]
+        known = {o["name"] for o in spec["options"]} | set(_RUN_KEYWORDS)
+        mine = {k: v for k, v in options.items() if k in known}
+        if "model" in mine and (not spec["takes_model"] or spec["model_metric"] != model_metric):
+            del mine["model"]
+        out[name] = _run(name, None, None, mine, ref_inputs, dist_inputs)
+    unknown = set(options) - set(_RUN_KEYWORDS) - {o["name"] for s in _SPECS.values()
+                                                   for o in s["options"]}
+    if unknown:
+        raise TypeError(f"compare() got unexpected keyword arguments {sorted(unknown)}")
+    return out
+
+
+# ---- tools ---------------------------------------------------------------------------------
+
+def read_mesh(path):
+    """Reads a mesh file (OBJ, OFF, PLY; a textured OBJ gets its texture's colours) as qm3d's
+    metrics read it.
+
+    Returns:
+        dict: positions (V, 3) float64, colors (V, 3) float64 in 0-1 (None when the file has
+        none), faces (F, 3) uint32, warnings (list of str: repairs made, e.g. vertices no face
+        uses dropped).
+    """
+    p, c, f, w = _qm3d.Input.from_file(_os.fsdecode(path)).mesh_arrays()
+    return {"positions": p, "colors": c, "faces": f, "warnings": list(w)}
+
+
+def read_cloud(path):
+    """Reads a point cloud (PLY, PCD), or a mesh file's vertices, as PCQM reads it.
+
+    Returns:
+        dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1.
+    """
+    p, c = _qm3d.Input.from_file(_os.fsdecode(path)).cloud_arrays()
+    return {"positions": p, "colors": c}
+
+
+def sample(mesh, points=None, density=None, seed=1):
+    """Samples a mesh's surface into a coloured point cloud, as ``qm3d sample`` does
+    (area-uniform; colours interpolated, or from the texture of a textured OBJ).
+
+    Args:
+        mesh: a mesh file, (positions, colors, faces) arrays or a dict of them, or an Open3D
+            TriangleMesh.
+        points: number of samples; or
+        density: samples per unit area (the mesh's units^-2).
+        seed: the random seed (same seed, same cloud on any machine).
+
+    Returns:
+        dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1.
+    """
+    if (points is None) == (density is None):
+        raise ValueError("sample: give exactly one of points and density")
+    inputs = _Inputs(mesh, "mesh")
+    p, c = _qm3d.sample(inputs.get("mesh"), int(points or 0), float(density or 0), int(seed))
+    return {"positions": p, "colors": c}
+
+
+def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1):
+    """Agreement of objective scores with subjective ones, as ``qm3d eval``: PLCC, SROCC, KROCC,
+    PLCC and RMSE after the logistic mapping, and the outlier ratio when `ci95` is given, each
+    with a 95% bootstrap interval (stimuli resampled, the logistic refitted).
+
+    Args:
+        scores, mos: sequences of the same length (NaN pairs are an error; drop them first).
+        ci95: optional per-stimulus 95% confidence half-widths of the MOS.
+        bootstrap: replicates (0 = no intervals).
+        seed: the bootstrap's seed.
+
+    Returns:
+        dict: stimuli, statistics {name: {value, ci95: [low, high] or None}}, logistic {beta1..4,
+        rmse, converged, bounded}, bootstrap {replicates, used, seed, confidence}.
+    """
+    s = _np.asarray(scores, dtype=float).ravel()
+    m = _np.asarray(mos, dtype=float).ravel()
+    c = _np.asarray(ci95 if ci95 is not None else [], dtype=float).ravel()
+    if s.size != m.size:
+        raise ValueError(f"scores and mos: {s.size} scores but {m.size} MOS values")
+    if c.size not in (0, s.size):
+        raise ValueError(f"ci95: {c.size} values for {s.size} stimuli")
+    for name, a in (("scores", s), ("mos", m), ("ci95", c)):
+        if not _np.all(_np.isfinite(a)):
+            raise ValueError(f"{name}: NaN or infinite values")
+    return _json.loads(_qm3d.evaluate(s.tolist(), m.tolist(), c.tolist(), int(bootstrap),
+                                      int(seed)))
+
+
+def load_model(path):
+    """Reads a model file (written by ``qm3d train``): dict with metric, features, weights and
+    the optional MOS mapping. Pass it (or the path) as ``model=`` to cmdm() / pcqm()."""
+    return _json.loads(_qm3d.load_model(_os.fsdecode(path)))
+
+
+def model_weights(model):
+    """The 8 feature weights of a model dict (load_model()), in f1..f8 order."""
+    weights = [0.0] * 8
+    for name, w in zip(model["features"], model["weights"]):
+        weights[int(name[1:]) - 1] = float(w)
+    return weights

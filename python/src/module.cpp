@@ -1,0 +1,368 @@
+// qm3d._qm3d: the compiled half of the Python package. It exposes the metric registry (every
+// metric with its options), inputs (files recognised by content, or numpy arrays copied once),
+// run() with the GIL released, and the results. The pure-Python layer (python/qm3d/__init__.py)
+// turns these into qm3d.cmdm(), qm3d.pcqm(), ... with the tool's names and defaults.
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/evaluation.h"
+#include "qm3d/common/evaluation_io.h"
+#include "qm3d/common/metric.h"
+#include "qm3d/common/model_io.h"
+#include "qm3d/common/result_io.h"
+#include "qm3d/common/version.h"
+#include "qm3d/mesh/mesh_io.h"
+#include "qm3d/mesh/metrics.h"
+#include "qm3d/pointcloud/metrics.h"
+
+namespace py = pybind11;
+
+namespace qm3d::python {
+namespace {
+
+const Registry& registry() {
+  static const Registry r = [] {
+    Registry reg;
+    mesh::register_metrics(reg);
+    pointcloud::register_metrics(reg);
+    return reg;
+  }();
+  return r;
+}
+
+[[noreturn]] void bad_argument(const std::string& argument, const std::string& what) {
+  throw py::value_error(argument + ": " + what);
+}
+
+// An (N, 3) array of any real or integer dtype, as doubles (one copy, any strides).
+template <typename Out>
+std::vector<Out> rows_of_three(const py::array& a, const std::string& argument) {
+  if (a.ndim() != 2 || a.shape(1) != 3) {
+    std::string shape = "(";
+    for (py::ssize_t d = 0; d < a.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(a.shape(d));
+    bad_argument(argument, "expected shape (N, 3), got " + shape + (a.ndim() == 1 ? ",)" : ")"));
+  }
+  const auto as_double = py::array_t<double, py::array::forcecast>::ensure(a);
+  if (!as_double) bad_argument(argument, "expected a numeric array");
+  const auto v = as_double.unchecked<2>();
+  std::vector<Out> out(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+    double* row = reinterpret_cast<double*>(&out[static_cast<std::size_t>(i)]);
+    for (int k = 0; k < 3; ++k) row[k] = v(i, k);
+  }
+  return out;
+}
+
+std::vector<Vec3> positions_of(const py::array& a) {
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    bad_argument("positions", "expected a float array, got dtype " + std::string(py::str(a.dtype())));
+  }
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  std::vector<Vec3> p = rows_of_three<Vec3>(a, "positions");
+  if (p.empty()) bad_argument("positions", "no points");
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!std::isfinite(p[i][0]) || !std::isfinite(p[i][1]) || !std::isfinite(p[i][2])) {
+      bad_argument("positions", "row " + std::to_string(i) + " is not finite (NaN or inf)");
+    }
+  }
+  return p;
+}
+
+// uint8 colours are 0..255 (divided by 255, as the readers do); float colours are 0..1.
+std::vector<Rgb> colors_of(const py::array& a, std::size_t points) {
+  const char kind = a.dtype().kind();
+  const bool bytes = kind == 'u' && a.itemsize() == 1;
+  if (!bytes && kind != 'f') {
+    bad_argument("colors", "expected uint8 (0-255) or float (0-1), got dtype " +
+                               std::string(py::str(a.dtype())));
+  }
+  static_assert(sizeof(Rgb) == 3 * sizeof(double));
+  std::vector<Rgb> c = rows_of_three<Rgb>(a, "colors");
+  if (c.size() != points) {
+    bad_argument("colors", std::to_string(c.size()) + " rows for " + std::to_string(points) +
+                               " positions (one colour per point/vertex)");
+  }
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    for (double* v : {&c[i].r, &c[i].g, &c[i].b}) {
+      if (bytes) {
+        *v /= 255.0;
+      } else if (!(*v >= 0.0 && *v <= 1.0)) {
+        bad_argument("colors", "row " + std::to_string(i) + " has " + std::to_string(*v) +
+                                   ", outside 0-1 (give uint8 for 0-255 colours)");
+      }
+    }
+  }
+  return c;
+}
+
+std::vector<Triangle> faces_of(const py::array& a, std::size_t vertices) {
+  const char kind = a.dtype().kind();
+  if (kind != 'i' && kind != 'u') {
+    bad_argument("faces", "expected an integer array, got dtype " + std::string(py::str(a.dtype())));
+  }
+  if (a.ndim() != 2 || a.shape(1) != 3) bad_argument("faces", "expected shape (F, 3)");
+  const auto as_int = py::array_t<long long, py::array::forcecast>::ensure(a);
+  const auto v = as_int.unchecked<2>();
+  std::vector<Triangle> t(static_cast<std::size_t>(a.shape(0)));
+  for (py::ssize_t f = 0; f < a.shape(0); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const long long i = v(f, k);
+      if (i < 0 || static_cast<unsigned long long>(i) >= vertices) {
+        bad_argument("faces", "row " + std::to_string(f) + " refers to vertex " +
+                                  std::to_string(i) + ", outside 0.." +
+                                  std::to_string(vertices - 1));
+      }
+      t[static_cast<std::size_t>(f)][k] = static_cast<std::uint32_t>(i);
+    }
+  }
+  return t;
+}
+
+// An input from arrays: a mesh when faces are given and `as_mesh`, else a cloud (faces ignored).
+Input input_from_arrays(const py::array& positions, const py::object& colors,
+                        const py::object& faces, const std::string& name, bool as_mesh) {
+  std::vector<Vec3> p = positions_of(positions);
+  std::vector<Rgb> c;
+  if (!colors.is_none()) c = colors_of(py::array::ensure(colors), p.size());
+  if (as_mesh && !faces.is_none()) {
+    std::vector<Triangle> t = faces_of(py::array::ensure(faces), p.size());
+    const bool has_colors = !c.empty();
+    mesh::MeshFile m = mesh::mesh_from_arrays(std::move(p), std::move(c), std::move(t), name);
+    return Input::from_mesh(MeshData{std::move(m.mesh), has_colors, std::move(m.warnings)}, name);
+  }
+  if (c.empty()) bad_argument("colors", "a point cloud needs one colour per point");
+  return Input::from_cloud(ColoredCloud{std::move(p), std::move(c)}, name);
+}
+
+py::array_t<double> as_numpy(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+template <typename Row>
+py::array_t<double> rows_as_numpy(const std::vector<Row>& rows) {
+  py::array_t<double> out({static_cast<py::ssize_t>(rows.size()), py::ssize_t(3)});
+  if (!rows.empty()) std::memcpy(out.mutable_data(), rows.data(), rows.size() * sizeof(Row));
+  return out;
+}
+
+py::array_t<std::uint32_t> faces_as_numpy(const std::vector<Triangle>& t) {
+  py::array_t<std::uint32_t> out({static_cast<py::ssize_t>(t.size()), py::ssize_t(3)});
+  if (!t.empty()) std::memcpy(out.mutable_data(), t.data(), t.size() * sizeof(Triangle));
+  return out;
+}
+
+py::dict spec_dict(const MetricSpec& s) {
+  py::dict d;
+  d["name"] = s.name;
+  d["title"] = s.title;
+  d["summary"] = s.summary;
+  d["applies_to"] = s.applies_to == AppliesTo::kMeshes   ? "meshes"
+                    : s.applies_to == AppliesTo::kClouds ? "clouds"
+                                                         : "both";
+  d["reads"] = s.reads == Input::Kind::kMesh ? "mesh" : "cloud";
+  d["default_direction"] = direction_name(s.default_direction);
+  d["direction_help"] = s.direction_help;
+  d["takes_model"] = s.takes_model;
+  d["model_metric"] = s.model_name();
+  py::list options;
+  for (const OptionSpec& o : s.options) {
+    py::dict od;
+    od["name"] = o.name;
+    od["help"] = o.help;
+    od["default"] = o.default_value.dump();  // JSON text; the Python layer decodes it
+    od["choices"] = o.choices;
+    od["min"] = o.min;
+    od["max"] = o.max;
+    od["min_exclusive"] = o.min_exclusive;
+    options.append(od);
+  }
+  d["options"] = options;
+  return d;
+}
+
+struct RunArguments {
+  std::string options_json;
+  std::optional<std::string> direction;
+  int threads = 0;
+  bool per_element = false;
+  std::string data_dir;
+  std::optional<std::vector<double>> weights;
+  std::optional<std::string> model_path;
+  py::object progress;
+};
+
+MetricResult run(const std::string& metric, const Input& reference, const Input& distorted,
+                 const RunArguments& a) {
+  const MetricSpec& spec = registry().get(metric);
+  RunOptions run;
+  if (a.direction) run.direction = parse_direction(*a.direction);
+  if (a.threads < 0) throw py::value_error("threads: must be 0 (all cores) or more");
+  run.threads = a.threads;
+  run.per_element = a.per_element;
+  run.data_dir = a.data_dir;
+  if (a.weights && a.model_path) throw py::value_error("give weights or model, not both");
+  if (a.weights) {
+    if (a.weights->size() != kNumFeatures) throw py::value_error("weights: expected 8 numbers");
+    LinearModel m;
+    m.metric = spec.model_name();
+    std::copy(a.weights->begin(), a.weights->end(), m.weights.begin());
+    m.provenance = "weights=";
+    run.model = m;
+  } else if (a.model_path) {
+    run.model = read_model_for(*a.model_path, spec.model_name());
+  }
+  if (!a.progress.is_none()) {
+    // Called from the metric's thread with the GIL released: take it for the call.
+    py::object callback = a.progress;
+    run.progress = [callback](const std::string& stage, double fraction) {
+      py::gil_scoped_acquire gil;
+      callback(stage, fraction);
+    };
+  }
+  const nlohmann::json options = nlohmann::json::parse(a.options_json);
+  py::gil_scoped_release release;
+  return run_metric(spec, reference, distorted, run, options);
+}
+
+}  // namespace
+}  // namespace qm3d::python
+
+PYBIND11_MODULE(_qm3d, m) {
+  using namespace qm3d;
+  using namespace qm3d::python;
+  m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
+  m.attr("__version__") = kVersion;
+
+  // Typed errors: a file that cannot be read is an OSError, bad content a ValueError.
+  py::register_exception<InputError>(m, "InputError", PyExc_OSError);
+  py::register_exception<FormatError>(m, "FormatError", PyExc_ValueError);
+  py::register_exception<NumericError>(m, "NumericError", PyExc_ValueError);
+
+  m.def("metrics", [] {
+    py::list out;
+    for (const MetricSpec& s : registry().metrics()) out.append(spec_dict(s));
+    return out;
+  });
+
+  py::class_<Input>(m, "Input")
+      .def_static("from_file", [](const std::string& path) { return registry().read(path); },
+                  py::arg("path"))
+      .def_static("from_arrays", &input_from_arrays, py::arg("positions"), py::arg("colors"),
+                  py::arg("faces"), py::arg("name"), py::arg("as_mesh"))
+      .def_property_readonly("name", &Input::name)
+      .def_property_readonly("kind",
+                             [](const Input& in) { return in.is_mesh() ? "mesh" : "cloud"; })
+      .def("mesh_arrays",
+           [](const Input& in) {
+             const MeshData& m = [&]() -> const MeshData& {
+               py::gil_scoped_release release;
+               return in.mesh();
+             }();
+             return py::make_tuple(rows_as_numpy(m.mesh.positions),
+                                   m.has_colors ? py::object(rows_as_numpy(m.mesh.colors))
+                                                : py::object(py::none()),
+                                   faces_as_numpy(m.mesh.triangles), m.warnings);
+           })
+      .def("cloud_arrays", [](const Input& in) {
+        const ColoredCloud& c = [&]() -> const ColoredCloud& {
+          py::gil_scoped_release release;
+          return in.cloud();
+        }();
+        return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors));
+      });
+
+  m.def("applicable", [](const Input& ref, const Input& dist) {
+    std::vector<std::string> names;
+    for (const MetricSpec* s : registry().applicable(ref, dist)) names.push_back(s->name);
+    return names;
+  });
+
+  py::class_<DirectionResult>(m, "DirectionResult")
+      .def_readonly("score", &DirectionResult::score)
+      .def_readonly("box_size", &DirectionResult::box_size)
+      .def_property_readonly("feature_values",
+                             [](const DirectionResult& d) {
+                               return std::vector<double>(d.features.begin(), d.features.end());
+                             })
+      .def_property_readonly("per_element", [](const DirectionResult& d) -> py::object {
+        if (d.per_element.empty()) return py::none();
+        return as_numpy(d.per_element);
+      });
+
+  py::class_<MetricResult>(m, "MetricResult")
+      .def_readonly("metric", &MetricResult::metric)
+      .def_readonly("score", &MetricResult::score)
+      .def_readonly("dist_to_ref", &MetricResult::dist_to_ref)
+      .def_readonly("ref_to_dist", &MetricResult::ref_to_dist)
+      .def_readonly("feature_names", &MetricResult::feature_names)
+      .def_readonly("warnings", &MetricResult::warnings)
+      .def_property_readonly("seconds",
+                             [](const MetricResult& r) { return r.provenance.seconds; })
+      .def("to_json", [](const MetricResult& r) { return to_json(r).dump(); })
+      .def("csv_row", [](const MetricResult& r) { return csv_row(r); });
+
+  m.def("csv_header", &csv_header);
+
+  m.def(
+      "run",
+      [](const std::string& metric, const Input& reference, const Input& distorted,
+         const std::string& options_json, std::optional<std::string> direction, int threads,
+         bool per_element, const std::string& data_dir, std::optional<std::vector<double>> weights,
+         std::optional<std::string> model_path, py::object progress) {
+        return run(metric, reference, distorted,
+                   RunArguments{options_json, std::move(direction), threads, per_element,
+                                data_dir, std::move(weights), std::move(model_path),
+                                std::move(progress)});
+      },
+      py::arg("metric"), py::arg("reference"), py::arg("distorted"), py::arg("options_json"),
+      py::arg("direction"), py::arg("threads"), py::arg("per_element"), py::arg("data_dir"),
+      py::arg("weights"), py::arg("model_path"), py::arg("progress"));
+
+  m.def(
+      "sample",
+      [](const Input& mesh, std::size_t points, double density, std::uint64_t seed) {
+        ColoredCloud c;
+        {
+          py::gil_scoped_release release;
+          c = registry().sampler()(mesh, SurfaceSampling{points, density, seed});
+        }
+        return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors));
+      },
+      py::arg("mesh"), py::arg("points"), py::arg("density"), py::arg("seed"));
+
+  m.def(
+      "evaluate",
+      [](const std::vector<double>& scores, const std::vector<double>& mos,
+         const std::vector<double>& ci95, std::size_t bootstrap, std::uint64_t seed) {
+        EvaluationOptions o;
+        o.bootstrap = bootstrap;
+        o.seed = seed;
+        EvaluationResult r;
+        {
+          py::gil_scoped_release release;
+          r = evaluate_scores(scores, mos, ci95, o);
+        }
+        nlohmann::ordered_json j;
+        j["stimuli"] = r.count;
+        for (const auto& [name, s] : named_statistics(r)) j["statistics"][name] = statistic_json(s);
+        j["logistic"] = logistic_json(r.fit);
+        j["bootstrap"] = {{"replicates", r.bootstrap_replicates},
+                          {"used", r.bootstrap_used},
+                          {"seed", seed},
+                          {"confidence", o.confidence}};
+        return j.dump();
+      },
+      py::arg("scores"), py::arg("mos"), py::arg("ci95"), py::arg("bootstrap"), py::arg("seed"));
+
+  m.def("load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
+        py::arg("path"));
+}
