@@ -346,25 +346,34 @@ def compare(reference, distorted, **options):
     if "weights" in options:
         raise TypeError("compare(): weights apply to one metric; give model= (a model file "
                         "names its metric) or call the metric")
+    _check_option_names("compare", options)
     ref_inputs, dist_inputs = _Inputs(reference, "reference"), _Inputs(distorted, "distorted")
-    names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
-    model = options.get("model")
-    model_metric = None
+    out = {}
+    for name in _qm3d.applicable(ref_inputs.any(), dist_inputs.any()):
+        out[name] = _run(name, None, None, _options_for(name, options), ref_inputs, dist_inputs)
+    return out
+
+
+def _check_option_names(caller, options):
+    """TypeError for a keyword no metric knows (each metric takes the ones it knows)."""
+    known = set(_RUN_KEYWORDS) | {o["name"] for s in _SPECS.values() for o in s["options"]}
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise TypeError(f"{caller}() got unexpected keyword arguments {unknown}")
+
+
+def _options_for(name, options):
+    """The options of a set given to several metrics that metric `name` takes: its own, the run
+    options, and a model only when it names this metric's model."""
+    spec = _SPECS[name]
+    known = {o["name"] for o in spec["options"]} | set(_RUN_KEYWORDS)
+    mine = {k: v for k, v in options.items() if k in known}
+    model = mine.get("model")
     if model is not None:
         model_metric = (model if isinstance(model, dict) else load_model(model))["metric"]
-    out = {}
-    for name in names:
-        spec = _SPECS[name]
-        known = {o["name"] for o in spec["options"]} | set(_RUN_KEYWORDS)
-        mine = {k: v for k, v in options.items() if k in known}
-        if "model" in mine and (not spec["takes_model"] or spec["model_metric"] != model_metric):
+        if not spec["takes_model"] or spec["model_metric"] != model_metric:
             del mine["model"]
-        out[name] = _run(name, None, None, mine, ref_inputs, dist_inputs)
-    unknown = set(options) - set(_RUN_KEYWORDS) - {o["name"] for s in _SPECS.values()
-                                                   for o in s["options"]}
-    if unknown:
-        raise TypeError(f"compare() got unexpected keyword arguments {sorted(unknown)}")
-    return out
+    return mine
 
 
 # ---- tools ---------------------------------------------------------------------------------

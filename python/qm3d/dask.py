@@ -1,0 +1,135 @@
+"""Scoring many pairs on a Dask cluster: the rows ``qm3d batch`` writes, as a pandas DataFrame.
+
+Example::
+
+    import qm3d.dask
+    table = qm3d.dask.score_pairs([("ref.ply", "d1.ply"), ("ref.ply", "d2.ply")])
+    # or on a running cluster:
+    from distributed import Client
+    table = qm3d.dask.score_pairs(pairs, client=Client("tcp://scheduler:8786"), metric="pcqm")
+
+Each pair (or each metric of a pair, for metric="compare") is one Dask task. A pair that fails
+gives a row with status "error" and its message, never a lost batch; a task lost with a dying
+worker is run again by Dask, so every row is there exactly once.
+"""
+
+import math
+
+import pandas as _pd
+
+import qm3d
+
+__all__ = ["score_pairs", "COLUMNS"]
+
+COLUMNS = qm3d._qm3d.csv_header().split(",")
+"""The columns, as in ``qm3d batch``'s CSV."""
+
+_TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error"}
+
+
+def _error_row(reference, distorted, metric, message):
+    row = {c: math.nan for c in COLUMNS}
+    row.update(reference=str(reference), distorted=str(distorted), metric=metric,
+               status="error", error=message)
+    return row
+
+
+def _row(result, reference, distorted):
+    import csv
+    fields = next(csv.reader([result.csv_row()]))
+    row = {}
+    for name, value in zip(COLUMNS, fields):
+        row[name] = value if name in _TEXT_COLUMNS else (float(value) if value else math.nan)
+    row.update(reference=str(reference), distorted=str(distorted))
+    return row
+
+
+def _metrics_of(reference, distorted, metric):
+    """The metric names batch would score for this pair (auto: the first that applies, compare:
+    all that apply)."""
+    if metric not in ("auto", "compare"):
+        return [metric]
+    ref = qm3d._Inputs(reference, "reference").any()
+    dist = qm3d._Inputs(distorted, "distorted").any()
+    names = qm3d._qm3d.applicable(ref, dist)
+    return names[:1] if metric == "auto" else names
+
+
+def _score_pair(reference, distorted, metric, options):
+    """Runs on a worker: the rows of one pair (one per metric for compare)."""
+    try:
+        names = _metrics_of(reference, distorted, metric)
+    except Exception as e:  # an unreadable file: one error row, as batch writes it
+        return [_error_row(reference, distorted, metric, str(e))]
+    rows = []
+    for name in names:
+        try:
+            rows.append(_row(qm3d.metric(name, str(reference), str(distorted),
+                                         **qm3d._options_for(name, options)),
+                             reference, distorted))
+        except Exception as e:
+            rows.append(_error_row(reference, distorted, name, str(e)))
+    return rows
+
+
+def _pairs_of(pairs, metric):
+    if isinstance(pairs, _pd.DataFrame):
+        if not {"reference", "distorted"} <= set(pairs.columns):
+            raise ValueError("pairs: a DataFrame needs 'reference' and 'distorted' columns")
+        metrics = pairs["metric"] if "metric" in pairs.columns else [metric] * len(pairs)
+        return [(r, d, m if isinstance(m, str) and m else metric)
+                for r, d, m in zip(pairs["reference"], pairs["distorted"], metrics)]
+    out = []
+    for i, p in enumerate(pairs):
+        if isinstance(p, (str, bytes)) or len(p) not in (2, 3):
+            raise ValueError(f"pairs[{i}]: expected (reference, distorted[, metric])")
+        out.append((p[0], p[1], p[2] if len(p) == 3 and p[2] else metric))
+    return out
+
+
+def score_pairs(pairs, client=None, metric="auto", **options):
+    """Scores every pair as Dask tasks and returns batch's rows as a DataFrame, in pair order.
+
+    Args:
+        pairs: (reference, distorted) or (reference, distorted, metric) file paths, or a
+            DataFrame with reference, distorted[, metric] columns (a batch list read by pandas).
+        client: a distributed.Client; None starts a LocalCluster of one single-threaded worker
+            process per core for the call (and closes it).
+        metric: for pairs that name none: a metric (see qm3d.metrics()), "auto" (CMDM for two
+            meshes, PCQM otherwise) or "compare" (one row per metric that applies).
+        **options: as for the metric functions (e.g. knn=10, scales=2), each metric taking the
+            ones it knows (as batch); threads defaults to 1 (one core per task: run as many
+            workers as cores).
+
+    Returns:
+        pandas.DataFrame with the columns of ``qm3d batch`` (COLUMNS), one row per (reference,
+        distorted, metric) as batch writes them (a key asked for twice is scored once); failed
+        pairs have status "error", their message in "error" and NaN scores.
+    """
+    from distributed import Client, LocalCluster
+
+    work = _pairs_of(pairs, metric)
+    qm3d._check_option_names("score_pairs", options)
+    if "weights" in options:
+        raise TypeError("score_pairs(): weights apply to one metric; give model= (a model file "
+                        "names its metric)")
+    options.setdefault("threads", 1)
+    own = None
+    if client is None:
+        import os
+        cluster = LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+        own = client = Client(cluster)
+    try:
+        futures = client.map(_score_pair, [w[0] for w in work], [w[1] for w in work],
+                             [w[2] for w in work], [options] * len(work), pure=False)
+        rows = [row for pair_rows in client.gather(futures) for row in pair_rows]
+    finally:
+        if own is not None:
+            cluster = own.cluster
+            own.close()
+            cluster.close()
+    # As batch: one row per (reference, distorted, metric), the first asked for.
+    table = _pd.DataFrame(rows, columns=COLUMNS)
+    return table.drop_duplicates(subset=["reference", "distorted", "metric"],
+                                 keep="first").reset_index(drop=True)
