@@ -158,7 +158,10 @@ Input Input::from_file(const std::filesystem::path& path, const Registry& regist
   s.format = format_of_file(head, path);
   switch (s.format) {
     case FileFormat::kPly: {
-      const ply::Header h = ply::parse_header(head, s.name);
+      // parse_header checks the declared counts against the data that follows, so it needs the
+      // whole file when the head was cut (a PLY larger than kSniffBytes).
+      const ply::Header h = ply::parse_header(
+          head.size() < kSniffBytes ? head : read_file_bytes(path), s.name);
       s.kind = Kind::kCloud;
       for (const auto& e : h.elements) {
         if (e.name == "face" && e.count > 0) s.kind = Kind::kMesh;
