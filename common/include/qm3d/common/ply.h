@@ -81,8 +81,10 @@ Content parse(const std::string& bytes, const std::string& name,
 struct WriteData {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint8_t, 3>> colors;  ///< empty or one per vertex
-  std::string scalar_name;                          ///< e.g. "distortion"; empty = none
-  std::vector<float> scalars;                       ///< one per vertex when scalar_name is set
+  /// Float vertex properties that all hold `scalars` (e.g. "distortion", MeshLab's "quality",
+  /// CloudCompare's "scalar_distortion"); empty = none.
+  std::vector<std::string> scalar_names;
+  std::vector<float> scalars;  ///< one per vertex when scalar_names is not empty
   std::vector<Triangle> triangles;
   Format format = Format::kBinaryLittleEndian;
   bool double_positions = false;  ///< write x, y, z as double instead of float
