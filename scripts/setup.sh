@@ -22,6 +22,7 @@ PACKAGES=(
   python3 python3-numpy time
   gnuplot-nox
   slurm-wlm munge
+  chromium libjs-three
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }
