@@ -20,6 +20,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 PY=/usr/bin/python3
+export PYTHONDONTWRITEBYTECODE=1  # no __pycache__ in the source tree
 CHROMIUM="$(command -v chromium || command -v chromium-browser || true)"
 THREE="${QM3D_THREE_JS:-/usr/share/javascript/three/three.min.js}"
 if [ -z "$CHROMIUM" ]; then
