@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -107,9 +108,17 @@ class Progress {
   std::mutex mutex_;
 };
 
-// Scores one pair; never throws (a failure becomes the row's error). Returns the row and whether
-// the pair failed.
-std::pair<std::string, bool> score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
+// One scored row: the CSV row and, when it succeeded, the result and its inputs (for a report).
+struct ScoredRow {
+  std::string row;
+  bool failed = false;
+  const MetricSpec* spec = nullptr;
+  std::optional<MetricResult> result;
+  std::optional<Input> reference, distorted;
+};
+
+// Scores one pair; never throws (a failure becomes the row's error).
+ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
     const Input r = registry().read(ref), d = registry().read(dist);
@@ -117,11 +126,103 @@ std::pair<std::string, bool> score_pair(const ListPair& pair, const std::string&
     MetricResult result = score(*specs.front(), r, d, o.request);
     result.provenance.reference = pair.reference;
     result.provenance.distorted = pair.distorted;
-    return {csv_row(result), false};
+    ScoredRow s{csv_row(result), false, specs.front(), std::nullopt, r, d};
+    if (!o.report_dir.empty()) s.result = std::move(result);
+    return s;
   } catch (const std::exception& e) {
-    return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true};
+    return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true, nullptr,
+            std::nullopt, std::nullopt, std::nullopt};
   }
 }
+
+// The reports of --report-dir: a pair's results are gathered until its last row of this run is
+// scored, then its report is written (by the worker that scored that row).
+class PairReports {
+ public:
+  PairReports(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo)
+      : o_(o) {
+    if (o.report_dir.empty()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(o.report_dir, ec);
+    if (ec || !std::filesystem::is_directory(o.report_dir)) {
+      throw InputError(o.report_dir.string() + ": cannot create the report folder (--report-dir)" +
+                       (ec ? ": " + ec.message() : std::string()));
+    }
+    for (const auto& [pair, metric] : todo) ++pending_[{pair.reference, pair.distorted}].left;
+  }
+
+  // Never throws: a report that cannot be written is recorded (errors()).
+  void add(const ListPair& pair, ScoredRow&& s) {
+    if (o_.report_dir.empty()) return;
+    Pending done;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      Pending& p = pending_[{pair.reference, pair.distorted}];
+      if (s.result) {
+        p.results.emplace_back(s.spec, std::move(*s.result));
+        p.reference = s.reference;
+        p.distorted = s.distorted;
+      }
+      if (--p.left > 0) return;
+      done = std::move(p);
+      pending_.erase({pair.reference, pair.distorted});
+    }
+    if (done.results.empty()) return;  // every row failed: its errors are in the results
+    try {
+      write(pair, done);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      errors_.push_back(e.what());
+    }
+  }
+
+  // Writes the index of every row of `results` (this run's and earlier ones').
+  void write_index(const std::filesystem::path& results) {
+    if (o_.report_dir.empty()) return;
+    std::vector<IndexRow> rows;
+    std::istringstream in(read_file_bytes(results));
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto f = csv_split(line);
+      if (f.size() < 6 || f[0] == "reference") continue;
+      IndexRow r{f[0], f[1], f[2], std::nullopt, f[5], ""};
+      if (f[4] == "ok" && !f[3].empty()) r.score = std::stod(f[3]);
+      const std::string name = report_file_name(r.reference, r.distorted);
+      if (std::filesystem::exists(o_.report_dir / name)) r.report = name;
+      rows.push_back(std::move(r));
+    }
+    const std::string index =
+        o_.shard ? "index-" + std::to_string(o_.shard->index) + "-of-" +
+                       std::to_string(o_.shard->count) + ".html"
+                 : "index.html";
+    write_report_index(o_.report_dir / index, rows,
+                       "qm3d batch: " + o_.list.filename().string());
+  }
+
+  const std::vector<std::string>& errors() const { return errors_; }
+
+ private:
+  struct Pending {
+    std::size_t left = 0;
+    std::vector<std::pair<const MetricSpec*, MetricResult>> results;
+    std::optional<Input> reference, distorted;
+  };
+
+  void write(const ListPair& pair, Pending& p) const {
+    // Registration order, as compare prints them (rows may finish in any order).
+    std::sort(p.results.begin(), p.results.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<ReportEntry> entries;
+    for (const auto& [spec, result] : p.results) entries.push_back({spec, &result});
+    write_html_report(o_.report_dir / report_file_name(pair.reference, pair.distorted), entries,
+                      *p.reference, *p.distorted, o_.report);
+  }
+
+  const BatchOptions& o_;
+  std::map<std::pair<std::string, std::string>, Pending> pending_;
+  std::mutex mutex_;
+  std::vector<std::string> errors_;
+};
 
 }  // namespace
 
@@ -167,6 +268,7 @@ int run_batch(const BatchOptions& o) {
       if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
     }
   }
+  PairReports reports(o, todo);
   RowWriter writer(o.output);
   if (!exists || !o.resume || std::filesystem::file_size(o.output) == 0) {
     writer.write_line(csv_header());
@@ -184,11 +286,14 @@ int run_batch(const BatchOptions& o) {
   BatchOptions per_job = o;
   const int job_threads = std::max(1, total_threads / jobs);
   per_job.request.run.threads = job_threads;
+  per_job.request.keep_per_element = !o.report_dir.empty();
   auto worker = [&] {
     omp_set_num_threads(job_threads);
     for (std::size_t i = next++; i < todo.size(); i = next++) {
-      const auto [row, failed] = score_pair(todo[i].first, todo[i].second, per_job);
-      writer.write_line(row);
+      ScoredRow s = score_pair(todo[i].first, todo[i].second, per_job);
+      writer.write_line(s.row);
+      const bool failed = s.failed;
+      reports.add(todo[i].first, std::move(s));
       progress.done_one(failed);
     }
   };
@@ -196,7 +301,9 @@ int run_batch(const BatchOptions& o) {
   for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
   worker();
   for (auto& t : threads) t.join();
-  return progress.failed() == 0 ? 0 : 2;
+  reports.write_index(o.output);
+  for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
+  return progress.failed() == 0 && reports.errors().empty() ? 0 : 2;
 }
 
 }  // namespace qm3d::app

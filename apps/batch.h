@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "commands.h"
+#include "html_report.h"
 #include "shard.h"
 
 namespace qm3d::app {
@@ -21,6 +22,11 @@ struct BatchOptions {
   bool quiet = false;            ///< no progress on stderr
   ScoreRequest request;          ///< run options (threads set per job) and metric options
   std::optional<Shard> shard;    ///< score only this part of the pairs (--shard K/N)
+  /// One HTML report per pair (report_file_name()) and an index of the results, sorted by score
+  /// (index.html; index-K-of-N.html for a shard); empty = none. A pair's report holds the
+  /// metrics scored in this run (with --resume, not the rows already done).
+  std::filesystem::path report_dir;
+  ReportSettings report;  ///< how the reports are drawn (when report_dir is set)
 };
 
 /// A list's relative path resolved against the list's folder.
@@ -33,7 +39,7 @@ std::filesystem::path resolve(const std::filesystem::path& list, const std::stri
 std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesystem::path& list);
 
 /// Runs the batch. Returns 0 when every pair succeeded and 2 when some failed (their rows carry
-/// the error). Throws InputError / FormatError when the list or the output cannot be used.
+/// the error) or a report could not be written (said on stderr). Throws InputError / FormatError when the list or the output cannot be used.
 int run_batch(const BatchOptions& options);
 
 }  // namespace qm3d::app

@@ -49,7 +49,7 @@ RunOptions run_options_for(const MetricSpec& spec, const ScoreRequest& request) 
 MetricResult score(const MetricSpec& spec, const Input& reference, const Input& distorted,
                    const ScoreRequest& request, const std::filesystem::path& map) {
   RunOptions run = run_options_for(spec, request);
-  run.per_element = !map.empty();
+  run.per_element = request.keep_per_element || !map.empty();
   MetricResult result =
       run_metric(spec, reference, distorted, run, options_for(spec, request.options));
   if (!map.empty()) write_map(map, spec, result, reference, distorted);

@@ -25,6 +25,8 @@ struct ScoreRequest {
   /// (every metric taking a model when `model_any_metric`).
   std::optional<LinearModel> model;
   bool model_any_metric = false;
+  /// Keep the per-element values in the result (for a report) even when no map is written.
+  bool keep_per_element = false;
 };
 
 /// The metrics a command or a batch row names for the pair: a metric's name, "auto" (the first

@@ -1,6 +1,10 @@
 #include "demo.h"
 
+#include <stdlib.h>
+
 #include <iomanip>
+#include <iostream>
+#include <optional>
 
 #include "commands.h"
 #include "qm3d/common/error.h"
@@ -31,6 +35,10 @@ constexpr DemoPair kPairs[] = {
      "sphere 2k cloud: 50% downsampling"},
 };
 
+// The pair whose report the demo writes (an index of kPairs): both kinds of noise, every mesh
+// metric.
+constexpr std::size_t kReportPair = 3;
+
 constexpr int kPairWidth = 42;
 constexpr int kScoreWidth = 14;
 
@@ -46,6 +54,35 @@ std::string fixed(double v) {
   return o.str();
 }
 
+// The report's settings; unset (with a warning) when three.js is missing and no folder was asked
+// for, so that the demo still shows its table.
+std::optional<ReportSettings> demo_report_settings(const ReportCli& report, bool quiet) {
+  try {
+    return report_settings(report);
+  } catch (const InputError& e) {
+    if (!report.file.empty()) throw;
+    if (!quiet) std::cerr << "qm3d: warning: no demo report: " << e.what() << "\n";
+    return std::nullopt;
+  }
+}
+
+// The given folder (created), or a new one in the temporary directory.
+std::filesystem::path demo_report_dir(const std::string& given) {
+  if (!given.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(given, ec);
+    if (ec || !std::filesystem::is_directory(given)) {
+      throw InputError(given + ": cannot create the report folder (--report-dir)");
+    }
+    return given;
+  }
+  std::string pattern = (std::filesystem::temp_directory_path() / "qm3d-demo-XXXXXX").string();
+  if (!::mkdtemp(pattern.data())) {
+    throw InputError(pattern + ": cannot create a temporary folder for the demo report");
+  }
+  return pattern;
+}
+
 }  // namespace
 
 std::filesystem::path default_demo_dir() {
@@ -57,10 +94,12 @@ std::filesystem::path default_demo_dir() {
   return QM3D_DEMO_DIR;
 }
 
-int run_demo(const std::filesystem::path& dir, const ScoreRequest& request, std::ostream& out) {
+int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
+             const ReportCli& report, bool quiet, std::ostream& out) {
   if (!std::filesystem::is_directory(dir / "meshes")) {
     throw InputError(dir.string() + ": bundled demo data not found (use --dir)");
   }
+  const std::optional<ReportSettings> settings = demo_report_settings(report, quiet);
   // One column per registered metric that applies to a bundled pair.
   std::vector<std::pair<Input, Input>> inputs;
   std::vector<const MetricSpec*> columns;
@@ -83,16 +122,39 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request, std:
   }
   row(out, "pair (reference vs distorted)", titles);
   row(out, std::string(kPairWidth - 2, '-'), rules);
+  std::vector<MetricResult> reported;
+  std::vector<const MetricSpec*> reported_specs;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     const auto& [ref, dist] = inputs[i];
+    ScoreRequest r = request;
+    r.keep_per_element = settings && i == kReportPair;
     std::vector<std::string> cells;
     for (const MetricSpec* m : columns) {
-      cells.push_back(m->applies(ref, dist) ? fixed(score(*m, ref, dist, request).score) : "-");
+      if (!m->applies(ref, dist)) {
+        cells.push_back("-");
+        continue;
+      }
+      MetricResult result = score(*m, ref, dist, r);
+      cells.push_back(fixed(result.score));
+      if (r.keep_per_element) {
+        reported.push_back(std::move(result));
+        reported_specs.push_back(m);
+      }
     }
     row(out, kPairs[i].what, cells);
   }
   out << "\nScores are distortions (0 = identical). PCQM on meshes uses their vertices; "
          "PCQM_SAMPLED samples both surfaces alike.\n";
+  if (!settings) return 0;
+  std::vector<ReportEntry> entries;
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    entries.push_back({reported_specs[i], &reported[i]});
+  }
+  const std::filesystem::path file = demo_report_dir(report.file) / "blob3_bothnoise_report.html";
+  write_html_report(file, entries, inputs[kReportPair].first, inputs[kReportPair].second,
+                    *settings);
+  out << "\nReport of '" << kPairs[kReportPair].what << "' (open it in a browser): "
+      << file.string() << "\n";
   return 0;
 }
 

@@ -5,6 +5,7 @@
 #include <ostream>
 
 #include "commands.h"
+#include "html_report.h"
 
 namespace qm3d::app {
 
@@ -12,7 +13,11 @@ namespace qm3d::app {
 std::filesystem::path default_demo_dir();
 
 /// Scores every bundled pair with every registered metric that applies and prints the table to
-/// `out`. Returns the exit code.
-int run_demo(const std::filesystem::path& dir, const ScoreRequest& request, std::ostream& out);
+/// `out`, then writes the HTML report of one pair (the blob3 mesh with geometric and colour
+/// noise) into `report.file` (a folder; empty = a new folder in the system's temporary
+/// directory) and prints its path. Without three.js the report is skipped with a warning, unless
+/// a folder was given (then InputError). Returns the exit code.
+int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
+             const ReportCli& report, bool quiet, std::ostream& out);
 
 }  // namespace qm3d::app

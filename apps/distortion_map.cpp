@@ -27,7 +27,9 @@ void write_distortion_map(const std::filesystem::path& path, const std::vector<V
   d.positions = positions;
   d.double_positions = true;
   d.triangles = triangles;
-  d.scalar_name = "distortion";
+  // The same values three times: our own name, MeshLab's vertex quality, a CloudCompare scalar
+  // field (CloudCompare loads every extra float property; "scalar_" is its own prefix).
+  d.scalar_names = {"distortion", "quality", "scalar_distortion"};
   d.scalars.assign(values.begin(), values.end());
   double lo = 0, hi = 0;
   if (!values.empty()) {

@@ -8,8 +8,9 @@
 
 namespace qm3d::app {
 
-/// Writes a binary PLY with the positions, a float `distortion` property holding `values`, and a
-/// heat-map colour (blue = lowest value of the object, red = highest), plus the triangles (empty
+/// Writes a binary PLY with the positions, the float properties `distortion`, `quality` (MeshLab's
+/// vertex quality) and `scalar_distortion` (a CloudCompare scalar field), all holding `values`, and
+/// a heat-map colour (blue = lowest value of the object, red = highest), plus the triangles (empty
 /// for a point cloud). Written atomically: never a partial file.
 void write_distortion_map(const std::filesystem::path& path, const std::vector<Vec3>& positions,
                           const std::vector<Triangle>& triangles, const std::vector<double>& values);

@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "demo.h"
 #include "eval_commands.h"
+#include "html_report.h"
 #include "merge_command.h"
 #include "metric_cli.h"
 #include "progress_display.h"
@@ -71,7 +72,8 @@ void add_output_options(CLI::App* cmd, OutputOptions& o, bool with_map) {
   if (with_map) {
     cmd->add_option("--map", o.map,
                     "Also write the per-vertex / per-point distortion as a binary PLY "
-                    "(positions, float 'distortion', heat-map colour; faces kept for meshes)")
+                    "(positions, the value as float 'distortion', 'quality' (MeshLab) and "
+                    "'scalar_distortion' (CloudCompare), heat-map colour; faces kept for meshes)")
         ->type_name("FILE.ply");
   }
 }
@@ -115,12 +117,15 @@ struct ScoreCli {
   RunCli run;
   MetricOptionsCli options;
   OutputOptions out;
+  ReportCli report;
 };
 
-// One command per registered metric, plus compare: REF DIST, the metric's options, output.
+// One command per registered metric, plus compare and report: REF DIST, the metric's options,
+// output.
 struct ScoreCommand {
-  const MetricSpec* spec = nullptr;  // nullptr: compare
+  const MetricSpec* spec = nullptr;  // nullptr: compare (or report)
   CLI::App* cmd = nullptr;
+  bool report = false;  // `qm3d report`: compare's metrics, the output is the HTML report
   std::unique_ptr<ScoreCli> cli = std::make_unique<ScoreCli>();
 };
 
@@ -130,6 +135,9 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
                                                       : all_metrics();
   ScoreRequest request = score_request(cli.run, c.spec, g.threads, g.data_dir);
   request.options = metric_option_values(specs, cli.options);
+  std::optional<ReportSettings> report;  // resolved first: a missing three.js fails fast
+  if (!cli.report.file.empty()) report = report_settings(cli.report);
+  request.keep_per_element = report.has_value();
   const Input ref = registry().read(cli.ref), dist = registry().read(cli.dist);
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
   std::vector<MetricResult> results;
@@ -140,7 +148,12 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
     results.push_back(score(*spec, ref, dist, r, c.spec ? cli.out.map : std::string()));
   }
   print_warnings(results, g.quiet);
-  emit(render(results, cli.out, c.spec == nullptr), cli.out.output);
+  if (report) {
+    std::vector<ReportEntry> entries;
+    for (std::size_t i = 0; i < results.size(); ++i) entries.push_back({chosen[i], &results[i]});
+    write_html_report(cli.report.file, entries, ref, dist, *report);
+  }
+  emit(render(results, cli.out, c.spec == nullptr), c.report ? std::string() : cli.out.output);
   return kExitOk;
 }
 
@@ -165,6 +178,14 @@ int run(int argc, char** argv) {
                                    "Every metric that applies: CMDM, MSDM2, PCQM on the vertices "
                                    "and PCQM on surface samples (pcqm_sampled; both meshes "
                                    "sampled alike) for two meshes, PCQM for two clouds")});
+  score_commands.push_back(
+      {nullptr,
+       app.add_subcommand("report",
+                          "Run every metric that applies (as compare) and write one "
+                          "self-contained HTML report: scores, features, options, warnings, "
+                          "linked 3-D views of both objects and the local-distortion heat map, "
+                          "its histogram and hottest regions. Prints the scores as compare does"),
+       true});
   for (const ScoreCommand& c : score_commands) {
     ScoreCli& cli = *c.cli;
     add_global_options(c.cmd, global);
@@ -174,7 +195,8 @@ int run(int argc, char** argv) {
     add_run_options(c.cmd, cli.run, c.spec);
     add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
                        cli.options);
-    add_output_options(c.cmd, cli.out, c.spec && c.spec->per_element_on_input);
+    if (!c.report) add_output_options(c.cmd, cli.out, c.spec && c.spec->per_element_on_input);
+    add_report_options(c.cmd, cli.report, c.report);
   }
 
   BatchOptions batch;
@@ -201,12 +223,20 @@ int run(int argc, char** argv) {
   add_run_options(batch_cmd, batch_run, nullptr);
   add_metric_options(batch_cmd, all_metrics(), batch_options);
   add_shard_option(batch_cmd, batch.shard);
+  ReportCli batch_report;
+  add_report_dir_options(batch_cmd, batch_report,
+                         "Also write one HTML report per pair into DIR (created if needed) and "
+                         "DIR/index.html listing every pair by score, linking to its report");
 
   auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d with "
                                               "every metric that applies and print the table");
   add_global_options(demo_cmd, global);
   std::string demo_dir = default_demo_dir().string();
   demo_cmd->add_option("--dir", demo_dir, "Folder of the bundled stimuli")->capture_default_str();
+  ReportCli demo_report;
+  add_report_dir_options(demo_cmd, demo_report,
+                         "Folder for the HTML report of one bundled pair (default: a new folder "
+                         "in the system's temporary directory)");
 
   const auto eval_commands =
       add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
@@ -236,12 +266,16 @@ int run(int argc, char** argv) {
     batch.quiet = global.quiet;
     batch.request = score_request(batch_run, nullptr, global.threads, global.data_dir);
     batch.request.options = metric_option_values(all_metrics(), batch_options);
+    if (!batch_report.file.empty()) {
+      batch.report_dir = batch_report.file;
+      batch.report = report_settings(batch_report);
+    }
     return run_batch(batch);
   }
   ScoreRequest demo;
   demo.run.threads = global.threads;
   demo.run.data_dir = global.data_dir;
-  return run_demo(demo_dir, demo, std::cout);
+  return run_demo(demo_dir, demo, demo_report, global.quiet, std::cout);
 }
 
 }  // namespace

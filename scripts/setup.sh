@@ -23,6 +23,7 @@ PACKAGES=(
   pybind11-dev python3-dev python3-pytest python3-pandas python3-open3d python3-distributed
   gnuplot-nox
   slurm-wlm munge
+  chromium libjs-three
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }

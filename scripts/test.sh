@@ -2,8 +2,9 @@
 # Runs the whole qm3d test suite with ctest (building first if needed).
 #
 #   scripts/test.sh              # normal Release build in build/, then the installed package
-#                                # used by tests/downstream (scripts/test_downstream.sh) and
-#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root)
+#                                # used by tests/downstream (scripts/test_downstream.sh),
+#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root) and
+#                                # HTML reports in headless Chromium (tests/report/test_report.sh)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -37,4 +38,8 @@ if [ ${#EXTRA[@]} -eq 0 ]; then
   slurm_rc=0
   bash "$ROOT/tests/slurm/test_slurm.sh" "$BUILD_DIR/apps/qm3d" || slurm_rc=$?
   [ "$slurm_rc" -eq 0 ] || [ "$slurm_rc" -eq 77 ] || exit "$slurm_rc"
+  # HTML reports opened in headless Chromium (exit 77: skipped, no chromium or libjs-three).
+  report_rc=0
+  bash "$ROOT/tests/report/test_report.sh" "$BUILD_DIR/apps/qm3d" || report_rc=$?
+  [ "$report_rc" -eq 0 ] || [ "$report_rc" -eq 77 ] || exit "$report_rc"
 fi

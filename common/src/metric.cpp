@@ -158,7 +158,8 @@ Input Input::from_file(const std::filesystem::path& path, const Registry& regist
   s.format = format_of_file(head, path);
   switch (s.format) {
     case FileFormat::kPly: {
-      const ply::Header h = ply::parse_header(head, s.name);
+      // The declared counts are checked against the whole file's size (the head may be cut).
+      const ply::Header h = ply::parse_header(head, s.name, std::filesystem::file_size(path));
       s.kind = Kind::kCloud;
       for (const auto& e : h.elements) {
         if (e.name == "face" && e.count > 0) s.kind = Kind::kMesh;

@@ -406,7 +406,8 @@ void skip_element(Cursor& cur, const Element& e, const std::string& name) {
 
 }  // namespace
 
-Header parse_header(const std::string& bytes, const std::string& name) {
+Header parse_header(const std::string& bytes, const std::string& name,
+                    std::optional<std::uint64_t> file_size) {
   if (bytes.size() < 4 || bytes.compare(0, 3, "ply") != 0 ||
       (bytes[3] != '\n' && bytes[3] != '\r')) {
     fail(name, "not a PLY file (missing 'ply' magic)");
@@ -460,7 +461,8 @@ Header parse_header(const std::string& bytes, const std::string& name) {
   h.data_offset = data;
   // A header may not claim more records than the data section can hold (checked before any
   // allocation, so a corrupt count fails fast).
-  std::uint64_t available = bytes.size() - std::min(bytes.size(), data);
+  const std::uint64_t size = file_size.value_or(bytes.size());
+  std::uint64_t available = size - std::min<std::uint64_t>(size, data);
   for (const auto& e : h.elements) {
     const std::uint64_t per = min_record_bytes(e, h.format);
     if (e.count > 0 && e.properties.empty()) fail(name, "element " + e.name + " has no properties");
@@ -513,7 +515,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
   if (!d.colors.empty() && d.colors.size() != d.positions.size()) {
     throw std::invalid_argument("ply::write: colour count differs from vertex count");
   }
-  if (!d.scalar_name.empty() && d.scalars.size() != d.positions.size()) {
+  if (!d.scalar_names.empty() && d.scalars.size() != d.positions.size()) {
     throw std::invalid_argument("ply::write: scalar count differs from vertex count");
   }
   if (d.format == Format::kBinaryBigEndian) {
@@ -527,7 +529,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
     const char* ptype = d.double_positions ? "double" : "float";
     out << "property " << ptype << " x\nproperty " << ptype << " y\nproperty " << ptype << " z\n";
     if (!d.colors.empty()) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    if (!d.scalar_name.empty()) out << "property float " << d.scalar_name << "\n";
+    for (const std::string& name : d.scalar_names) out << "property float " << name << "\n";
     if (!d.triangles.empty()) {
       out << "element face " << d.triangles.size() << "\nproperty list uchar int vertex_indices\n";
     }
@@ -541,7 +543,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
           out << ' ' << int(d.colors[i][0]) << ' ' << int(d.colors[i][1]) << ' '
               << int(d.colors[i][2]);
         }
-        if (!d.scalar_name.empty()) out << ' ' << d.scalars[i];
+        for (std::size_t k = 0; k < d.scalar_names.size(); ++k) out << ' ' << d.scalars[i];
         out << '\n';
         continue;
       }
@@ -552,7 +554,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
           put<float>(out, static_cast<float>(c));
       }
       if (!d.colors.empty()) out.write(reinterpret_cast<const char*>(d.colors[i].data()), 3);
-      if (!d.scalar_name.empty()) put<float>(out, d.scalars[i]);
+      for (std::size_t k = 0; k < d.scalar_names.size(); ++k) put<float>(out, d.scalars[i]);
     }
     for (const Triangle& t : d.triangles) {
       if (ascii) {

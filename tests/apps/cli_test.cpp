@@ -160,7 +160,10 @@ TEST_F(Cli, MapIsWrittenAndHoldsTheLibrarysPerVertexValues) {
   const CliRun r = qm3d("cmdm " + ref + " " + dist + " --map " + map.string());
   ASSERT_EQ(r.code, 0) << r.err;
   const std::string bytes = slurp(map);
-  EXPECT_NE(bytes.find("property float distortion"), std::string::npos);
+  // The value under our name, as MeshLab's vertex quality and as a CloudCompare scalar field.
+  EXPECT_NE(bytes.find("property float distortion\nproperty float quality\n"
+                       "property float scalar_distortion\n"),
+            std::string::npos);
   const ply::Content c = ply::read(map);
   const mesh::MeshFile d = mesh::read_mesh(dist);
   ASSERT_EQ(c.positions.size(), d.mesh.num_vertices());
@@ -168,12 +171,36 @@ TEST_F(Cli, MapIsWrittenAndHoldsTheLibrarysPerVertexValues) {
   // Values: read the float property by hand from the binary body.
   const auto lib = mesh::compute_cmdm(mesh::read_mesh(ref).mesh, d.mesh);
   const std::size_t body = bytes.find("end_header\n") + 11;
-  const std::size_t stride = 3 * 8 + 3 + 4;  // double xyz, uchar rgb, float distortion
+  const std::size_t stride = 3 * 8 + 3 + 3 * 4;  // double xyz, uchar rgb, 3 floats
   for (std::size_t i = 0; i < c.positions.size(); i += 97) {
-    float v;
-    std::memcpy(&v, bytes.data() + body + i * stride + 27, 4);
-    EXPECT_EQ(v, static_cast<float>(lib.dist_to_ref->per_element[i])) << i;
+    for (std::size_t k = 0; k < 3; ++k) {
+      float v;
+      std::memcpy(&v, bytes.data() + body + i * stride + 27 + 4 * k, 4);
+      EXPECT_EQ(v, static_cast<float>(lib.dist_to_ref->per_element[i])) << i;
+    }
   }
+}
+
+TEST_F(Cli, ReportNeedsThreeJsAndNamesIt) {
+  const fs::path out = dir_ / "io" / "r.html";
+  const std::string pair = cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_colnoise.off");
+  const CliRun r = test::run_qm3d("report " + pair + " -o " + out.string(), dir_ / "cwd",
+                                  dir_ / "io", "QM3D_THREE_JS=/nonexistent/three.js");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "qm3d: error: /nonexistent/three.js: three.js not found (install Debian's "
+                   "libjs-three, or give --three-js FILE or set QM3D_THREE_JS)\n");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_NE(qm3d("report " + pair).code, 0);  // -o is required
+  EXPECT_EQ(qm3d("cmdm " + pair + " --report " + out.string() + " --range 1,0").code, 1);
+}
+
+TEST_F(Cli, DemoWritesItsReportIntoTheGivenFolder) {
+  const fs::path folder = dir_ / "io" / "demo";
+  const CliRun r = qm3d("demo --report-dir " + folder.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const fs::path report = folder / "blob3_bothnoise_report.html";
+  EXPECT_NE(r.out.find(report.string()), std::string::npos) << r.out;
+  EXPECT_NE(slurp(report).find("id=\"qm3d-data\""), std::string::npos);
 }
 
 TEST_F(Cli, PcqmMapIsThePerPointDistortionOfTheReference) {

@@ -57,6 +57,23 @@ TEST(DetectFormat, FilesFallBackToTheirExtensionOnlyWhenTheContentSaysNothing) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Input, RecognisesLargeFilesFromTheirHead) {
+  // More than the 1 MiB looked at: the declared counts are checked against the file's size.
+  const auto path = std::filesystem::temp_directory_path() / "qm3d_large_cloud.ply";
+  const std::size_t n = 100000;
+  std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(n) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  bytes.resize(bytes.size() + n * 12, '\0');
+  std::ofstream(path, std::ios::binary) << bytes;
+  const Registry reg;
+  const Input in = Input::from_file(path, reg);
+  EXPECT_FALSE(in.is_mesh());
+  EXPECT_EQ(in.format(), FileFormat::kPly);
+  std::filesystem::resize_file(path, bytes.size() - 12);  // one point short
+  EXPECT_THROW(Input::from_file(path, reg), FormatError);
+  std::filesystem::remove(path);
+}
+
 // A metric made here: the score is the difference of the first coordinates' sums.
 MetricSpec toy_metric(const std::string& name, AppliesTo applies) {
   MetricSpec s;

@@ -232,7 +232,7 @@ TEST(Ply, WriterRoundTripsThroughTheReader) {
     d.double_positions = true;
     d.positions = {{0.1, 0.2, 0.3}, {1, 2, 3}, {-1, 0, 5}};
     d.colors = {{{255, 0, 0}}, {{0, 255, 0}}, {{0, 0, 255}}};
-    d.scalar_name = "distortion";
+    d.scalar_names = {"distortion", "quality"};
     d.scalars = {0.5f, 0.25f, 0.0f};
     d.triangles = {{0, 1, 2}};
     write(dir / "out.ply", d);

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,8 +57,11 @@ struct Content {
   std::vector<std::uint32_t> face_indices;
 };
 
-/// Parses the header of `bytes` (the file's content); `name` is used in error messages.
-Header parse_header(const std::string& bytes, const std::string& name);
+/// Parses the header of `bytes` (the file's content); `name` is used in error messages. When
+/// `bytes` is only the beginning of the file, `file_size` (the whole file's) is what the declared
+/// element counts are checked against.
+Header parse_header(const std::string& bytes, const std::string& name,
+                    std::optional<std::uint64_t> file_size = std::nullopt);
 
 /// How ASCII values of properties declared `float` are parsed (binary files hold the declared
 /// type anyway).
@@ -81,8 +85,10 @@ Content parse(const std::string& bytes, const std::string& name,
 struct WriteData {
   std::vector<Vec3> positions;
   std::vector<std::array<std::uint8_t, 3>> colors;  ///< empty or one per vertex
-  std::string scalar_name;                          ///< e.g. "distortion"; empty = none
-  std::vector<float> scalars;                       ///< one per vertex when scalar_name is set
+  /// Float vertex properties that all hold `scalars` (e.g. "distortion", MeshLab's "quality",
+  /// CloudCompare's "scalar_distortion"); empty = none.
+  std::vector<std::string> scalar_names;
+  std::vector<float> scalars;  ///< one per vertex when scalar_names is not empty
   std::vector<Triangle> triangles;
   Format format = Format::kBinaryLittleEndian;
   bool double_positions = false;  ///< write x, y, z as double instead of float
