@@ -48,7 +48,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const std::invalid_argument&) {
   }
   try {
-    qm3d::mesh::compute_msdm2(a, b, {qm3d::Direction::kSymmetric, 2, true});
+    qm3d::mesh::Msdm2Options m;
+    m.direction = qm3d::Direction::kSymmetric;
+    m.scales = 2;
+    qm3d::mesh::compute_msdm2(a, b, m);
   } catch (const qm3d::Error&) {
   } catch (const std::invalid_argument&) {
   }
@@ -57,7 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.data_dir = QM3D_FUZZ_TABLES;
     p.radius_rel = 0.05 + (in.next() % 8) / 10.0;
     p.knn = 1 + in.next() % 6;
-    p.direction = Direction::kSymmetric;
+    p.direction = qm3d::Direction::kSymmetric;
     qm3d::pointcloud::compute_pcqm(qm3d::vertex_cloud(a), qm3d::vertex_cloud(b), p);
   } catch (const qm3d::Error&) {
   } catch (const std::invalid_argument&) {
