@@ -95,8 +95,40 @@ int grid_coordinate(double v, const std::filesystem::path& path, std::size_t row
 
 }  // namespace
 
-double srgb_to_linear(double c) {
+namespace {
+
+double srgb_to_linear_formula(double c) {
   return c > kSrgbLinearThreshold ? std::pow((c + 0.055) / 1.055, 2.4) : c / 12.92;
+}
+
+// The formula's value at each 8-bit channel k / 255.0 (how the readers convert 8-bit colours),
+// computed once: a channel equal, bit for bit, to one of these inputs gets the very value the
+// formula gives; any other channel goes through the formula.
+struct LinearChannelTable {
+  double in[256];
+  double out[256];
+  LinearChannelTable() {
+    for (int k = 0; k < 256; ++k) {
+      in[k] = k / 255.0;
+      out[k] = srgb_to_linear_formula(in[k]);
+    }
+  }
+};
+
+const LinearChannelTable& linear_channel_table() {
+  static const LinearChannelTable table;
+  return table;
+}
+
+}  // namespace
+
+double srgb_to_linear(double c) {
+  if (c >= 0.0 && c <= 1.0) {
+    const LinearChannelTable& t = linear_channel_table();
+    const int k = static_cast<int>(c * 255.0 + 0.5);
+    if (t.in[k] == c) return t.out[k];
+  }
+  return srgb_to_linear_formula(c);
 }
 
 Lab srgb_to_cielab(const Rgb& rgb) {
