@@ -315,7 +315,10 @@ OptionValues MetricSpec::complete(const OptionValues& given) const {
   OptionValues out = nlohmann::json::object();
   for (const auto& o : options) out[o.name] = o.default_value;
   if (given.is_object()) {
-    for (const auto& [key, value] : given.items()) {
+    for (const auto& item : given.items()) {
+      // Not a structured binding: C++17 lambdas cannot capture those (clang rejects it).
+      const std::string& key = item.key();
+      const nlohmann::json& value = item.value();
       const auto it = std::find_if(options.begin(), options.end(),
                                    [&](const OptionSpec& o) { return o.name == key; });
       if (it == options.end()) {
