@@ -194,6 +194,19 @@ for _s in _qm3d.metrics():
         _o["default"] = _json.loads(_o["default"])
     _SPECS[_s["name"]] = _s
 
+def _installed_tables():
+    """PREFIX/share/qm3d/lab2000hl beside an installed package (PREFIX/lib/python3.X/
+    dist-packages/qm3d), as the installed tool finds its tables; None elsewhere (a build tree)."""
+    here = _os.path.dirname(_os.path.realpath(__file__))
+    prefix = _os.path.dirname(_os.path.dirname(_os.path.dirname(_os.path.dirname(here))))
+    tables = _os.path.join(prefix, "share", "qm3d", "lab2000hl")
+    return tables if _os.path.isfile(_os.path.join(tables, "L_data.txt")) else None
+
+
+# The tables: data_dir=, else $QM3D_DATA_DIR, else an installation's own, else the build-time
+# directory (the tool's order).
+_DEFAULT_TABLES = None if _os.environ.get("QM3D_DATA_DIR") else _installed_tables()
+
 _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
                  "progress")
 
@@ -263,7 +276,8 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None):
     result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
                        _json.dumps(options), run["direction"], int(run["threads"]),
                        bool(run["per_element"]),
-                       "" if run["data_dir"] is None else _os.fsdecode(run["data_dir"]),
+                       _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
+                       else (_DEFAULT_TABLES or ""),
                        weights, model_path, run["progress"])
     return Result(result)
 
