@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "markup.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 
@@ -70,29 +71,6 @@ std::string format(const char* spec, double v) {
   return buf;
 }
 
-std::string xml_escaped(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 struct Frame {
   Range x, y;
   double px(double v) const {
@@ -128,10 +106,10 @@ void svg_axes(std::ostream& out, const Frame& f, const ScatterPlot& p) {
         << "</text>\n";
   }
   out << "<text x=\"" << (x0 + x1) / 2 << "\" y=\"" << kHeight - 18 << "\" text-anchor=\"middle\">"
-      << xml_escaped(p.x_label) << "</text>\n<text transform=\"translate(20," << (y0 + y1) / 2
-      << ") rotate(-90)\" text-anchor=\"middle\">" << xml_escaped(p.y_label)
+      << markup_escaped(p.x_label) << "</text>\n<text transform=\"translate(20," << (y0 + y1) / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">" << markup_escaped(p.y_label)
       << "</text>\n<text x=\"" << kWidth / 2
-      << "\" y=\"28\" text-anchor=\"middle\" font-weight=\"bold\">" << xml_escaped(p.title)
+      << "\" y=\"28\" text-anchor=\"middle\" font-weight=\"bold\">" << markup_escaped(p.title)
       << "</text>\n";
 }
 

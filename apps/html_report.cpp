@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "markup.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
@@ -63,33 +64,6 @@ void fill_template(std::ostream& out, const std::string& page, const Fill& fill)
     pos = from = close + 2;
   }
   out.write(page.data() + pos, static_cast<std::streamsize>(page.size() - pos));
-}
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 // JSON inside <script>: no '<' at all (it can only be inside strings, where \u003c is the same),
@@ -459,10 +433,10 @@ void write_html_report(const std::filesystem::path& file, const std::vector<Repo
   write_file_atomically(file, [&](std::ostream& out) {
     fill_template(out, kReportTemplate, [&](const std::string& marker, std::ostream& o) {
       if (marker == "TITLE") {
-        o << html_escape(title);
+        o << markup_escaped(title);
       } else if (marker == "THREE_JS") {
         o << "/* three.js (MIT licence, https://threejs.org), inlined by qm3d from "
-          << html_escape(settings.three_js.string()) << " */\n"
+          << markup_escaped(settings.three_js.string()) << " */\n"
           << three;
       } else if (marker == "DATA") {
         o << script_json(data);
@@ -521,11 +495,11 @@ std::string index_rows_html(const std::vector<IndexPair>& pairs,
                             const std::vector<std::string>& columns) {
   std::ostringstream o;
   o << "<thead><tr><th data-type=\"text\">distorted</th><th data-type=\"text\">reference</th>";
-  for (const auto& c : columns) o << "<th data-type=\"number\">" << html_escape(c) << "</th>";
+  for (const auto& c : columns) o << "<th data-type=\"number\">" << markup_escaped(c) << "</th>";
   o << "<th data-type=\"text\">report</th></tr></thead>\n<tbody>\n";
   for (const IndexPair& p : pairs) {
     o << "<tr" << (p.error.empty() ? "" : " class=\"failed\"") << "><td>"
-      << html_escape(p.distorted) << "</td><td>" << html_escape(p.reference) << "</td>";
+      << markup_escaped(p.distorted) << "</td><td>" << markup_escaped(p.reference) << "</td>";
     for (const auto& c : columns) {
       const auto it = p.scores.find(c);
       const bool has = it != p.scores.end() && it->second;
@@ -533,8 +507,8 @@ std::string index_rows_html(const std::vector<IndexPair>& pairs,
         << (has ? format_double(*it->second) : "") << "</td>";
     }
     o << "<td>";
-    if (!p.report.empty()) o << "<a href=\"" << html_escape(p.report) << "\">report</a>";
-    if (!p.error.empty()) o << "<span class=\"error\">" << html_escape(p.error) << "</span>";
+    if (!p.report.empty()) o << "<a href=\"" << markup_escaped(p.report) << "\">report</a>";
+    if (!p.error.empty()) o << "<span class=\"error\">" << markup_escaped(p.error) << "</span>";
     o << "</td></tr>\n";
   }
   o << "</tbody>";
@@ -554,10 +528,10 @@ void write_report_index(const std::filesystem::path& file, const std::vector<Ind
   write_file_atomically(file, [&](std::ostream& out) {
     fill_template(out, kIndexTemplate, [&](const std::string& marker, std::ostream& o) {
       if (marker == "TITLE") {
-        o << html_escape(title);
+        o << markup_escaped(title);
       } else if (marker == "SUMMARY") {
         o << pairs.size() << " pairs, " << failed << " failed; sorted by "
-          << html_escape(columns.empty() ? std::string("score") : columns.front())
+          << markup_escaped(columns.empty() ? std::string("score") : columns.front())
           << ", most distorted first (click a column to sort by it). qm3d " << kVersion;
       } else if (marker == "TABLE") {
         o << table;
