@@ -4,12 +4,14 @@
 #include "html_report.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
 
 #include "qm3d/common/error.h"
 
@@ -58,7 +60,7 @@ TEST(HtmlReport, HottestRegionsAreApartAndSummarised) {
   EXPECT_EQ(r[0].value, 1.0);
   EXPECT_EQ(r[0].elements, 3u);
   EXPECT_DOUBLE_EQ(r[0].mean, (0.8 + 1.0 + 0.9) / 3);
-  EXPECT_EQ(r[1].element, 0u);  // 0.5, 2 from point 2
+  EXPECT_EQ(r[1].element, 0u);   // 0.5, 2 from point 2
   EXPECT_EQ(r[1].elements, 2u);  // 0 and 1
   EXPECT_DOUBLE_EQ(r[1].mean, (0.5 + 0.8) / 2);
   EXPECT_EQ(r[2].element, 4u);  // 0.1, 2 from point 2 and 4 from point 0
@@ -104,7 +106,11 @@ TEST(HtmlReport, FileNamesAreStableSafeAndDistinct) {
 class WrittenReport : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / "qm3d_html_report_test";
+    // One directory per test and process: ctest runs this fixture's tests concurrently.
+    dir_ = fs::temp_directory_path() /
+           ("qm3d_html_report_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     std::ofstream(dir_ / "three.js") << "var THREE = {};";
@@ -187,7 +193,8 @@ TEST_F(WrittenReport, DecimatesAboveTheBudgetAndSaysSo) {
 }
 
 TEST(HtmlReport, IndexSortsByScoreAndLinksReports) {
-  const fs::path file = fs::temp_directory_path() / "qm3d_html_report_index.html";
+  const fs::path file = fs::temp_directory_path() /
+                        ("qm3d_html_report_index_" + std::to_string(::getpid()) + ".html");
   write_report_index(file,
                      {{"r.ply", "low.ply", "cmdm", 0.1, "", "low.html"},
                       {"r.ply", "bad.ply", "cmdm", std::nullopt, "cannot read", ""},

@@ -3,6 +3,7 @@
 #include "qm3d/common/metric.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -31,15 +32,17 @@ TEST(DetectFormat, RecognisesEachFormatByContent) {
   EXPECT_EQ(detect_format("VERSION .7\nFIELDS x y z\n", "a"), FileFormat::kPcd);
   EXPECT_EQ(detect_format("# made by hand\nv 0 0 0\nv 1 0 0\n", "a"), FileFormat::kObj);
   EXPECT_EQ(detect_format("mtllib a.mtl\n  v 0 0 0\n", "a"), FileFormat::kObj);
-  EXPECT_NE(error_of([] { detect_format("solid x\nfacet\n", "x.stl"); })
-                .find("x.stl: not a PLY, OBJ, OFF or PCD file"),
+  EXPECT_NE(error_of([] {
+              detect_format("solid x\nfacet\n", "x.stl");
+            }).find("x.stl: not a PLY, OBJ, OFF or PCD file"),
             std::string::npos);
   EXPECT_THROW(detect_format(std::string("v 0 0 0\0\1", 9), "bin"), FormatError);
   EXPECT_THROW(detect_format("MOFF\n", "m"), FormatError);  // not an OFF keyword
 }
 
 TEST(DetectFormat, FilesFallBackToTheirExtensionOnlyWhenTheContentSaysNothing) {
-  const auto dir = std::filesystem::temp_directory_path() / "qm3d_detect_format";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("qm3d_detect_format_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto write = [&](const char* name, const std::string& text) {
     std::ofstream(dir / name, std::ios::binary) << text;
@@ -49,9 +52,9 @@ TEST(DetectFormat, FilesFallBackToTheirExtensionOnlyWhenTheContentSaysNothing) {
             FileFormat::kPly);
   EXPECT_EQ(detect_format(write("mesh.ply", "OFF\n3 1 0\n")), FileFormat::kOff);
   EXPECT_EQ(detect_format(write("empty.off", "")), FileFormat::kOff);  // the OFF reader says why
-  EXPECT_NE(error_of([&] { detect_format(write("x.stl", "solid x\n")); })
-                .find("unknown format '.stl'"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { detect_format(write("x.stl", "solid x\n")); }).find("unknown format '.stl'"),
+      std::string::npos);
   EXPECT_THROW(detect_format(dir / "missing.ply"), InputError);
   EXPECT_THROW(detect_format(dir), InputError);
   std::filesystem::remove_all(dir);
@@ -59,7 +62,8 @@ TEST(DetectFormat, FilesFallBackToTheirExtensionOnlyWhenTheContentSaysNothing) {
 
 TEST(Input, RecognisesLargeFilesFromTheirHead) {
   // More than the 1 MiB looked at: the declared counts are checked against the file's size.
-  const auto path = std::filesystem::temp_directory_path() / "qm3d_large_cloud.ply";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("qm3d_large_cloud_" + std::to_string(::getpid()) + ".ply");
   const std::size_t n = 100000;
   std::string bytes = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(n) +
                       "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
@@ -112,8 +116,8 @@ ColoredCloud cloud_of(std::initializer_list<double> xs) {
 }
 
 ColoredMesh triangle() {
-  return ColoredMesh{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-                     {{0, 1, 2}}};
+  return ColoredMesh{
+      {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}}};
 }
 
 TEST(MetricSpec, CompleteFillsDefaultsAndRejectsWhatDoesNotFit) {
@@ -146,11 +150,13 @@ TEST(Registry, FindsAppliesAndChoosesInRegistrationOrder) {
   reg.add(toy_metric("clouds_only", AppliesTo::kClouds));
   EXPECT_THROW(reg.add(toy_metric("anything", AppliesTo::kBoth)), std::logic_error);
   EXPECT_EQ(reg.find("nope"), nullptr);
-  EXPECT_NE(error_of([&] { reg.get("nope"); })
-                .find("unknown metric 'nope' (expected meshes_only, anything, clouds_only)"),
+  EXPECT_NE(error_of([&] {
+              reg.get("nope");
+            }).find("unknown metric 'nope' (expected meshes_only, anything, clouds_only)"),
             std::string::npos);
   const Input m1 = Input::from_mesh(triangle(), "m1"), m2 = Input::from_mesh(triangle(), "m2");
-  const Input c1 = Input::from_cloud(cloud_of({0}), "c1"), c2 = Input::from_cloud(cloud_of({1}), "c2");
+  const Input c1 = Input::from_cloud(cloud_of({0}), "c1"),
+              c2 = Input::from_cloud(cloud_of({1}), "c2");
   const auto names = [&](const Input& a, const Input& b) {
     std::string out;
     for (const MetricSpec* m : reg.applicable(a, b)) out += m->name + " ";

@@ -1,6 +1,7 @@
 #include "qm3d/common/model_io.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -38,7 +39,8 @@ TEST(ModelIo, RoundTripIsExact) {
   ModelFile m;
   m.model = {"pcqm", {0, 0.1 / 3, 0, 1e-300, 0, -2.5, 0, 0.7}, "test \"quoted\""};
   m.mos_mapping = LogisticFunction{1.25, 4.5, 0.0123456789, 0.00321};
-  const fs::path file = fs::temp_directory_path() / "qm3d_model_io_round_trip.json";
+  const fs::path file = fs::temp_directory_path() /
+                        ("qm3d_model_io_round_trip_" + std::to_string(::getpid()) + ".json");
   write_model(file, m);
   const ModelFile back = read_model(file);
   fs::remove(file);

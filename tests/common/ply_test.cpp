@@ -1,6 +1,7 @@
 #include "qm3d/common/ply.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -63,14 +64,22 @@ struct Builder {
       o << v << " ";
       return;
     }
-    if (t == "char") raw<std::int8_t>(o, std::int8_t(v));
-    else if (t == "uchar") raw<std::uint8_t>(o, std::uint8_t(v));
-    else if (t == "short") raw<std::int16_t>(o, std::int16_t(v));
-    else if (t == "ushort") raw<std::uint16_t>(o, std::uint16_t(v));
-    else if (t == "int") raw<std::int32_t>(o, std::int32_t(v));
-    else if (t == "uint") raw<std::uint32_t>(o, std::uint32_t(v));
-    else if (t == "float") raw<float>(o, float(v));
-    else raw<double>(o, v);
+    if (t == "char")
+      raw<std::int8_t>(o, std::int8_t(v));
+    else if (t == "uchar")
+      raw<std::uint8_t>(o, std::uint8_t(v));
+    else if (t == "short")
+      raw<std::int16_t>(o, std::int16_t(v));
+    else if (t == "ushort")
+      raw<std::uint16_t>(o, std::uint16_t(v));
+    else if (t == "int")
+      raw<std::int32_t>(o, std::int32_t(v));
+    else if (t == "uint")
+      raw<std::uint32_t>(o, std::uint32_t(v));
+    else if (t == "float")
+      raw<float>(o, float(v));
+    else
+      raw<double>(o, v);
   }
 };
 
@@ -224,7 +233,8 @@ TEST(Ply, AsciiRecordsMustHaveTheDeclaredValueCount) {
 }
 
 TEST(Ply, WriterRoundTripsThroughTheReader) {
-  const auto dir = std::filesystem::temp_directory_path() / "qm3d_ply_write";
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("qm3d_ply_write_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   for (Format f : {Format::kAscii, Format::kBinaryLittleEndian}) {
     WriteData d;
