@@ -74,7 +74,8 @@ struct PointData {
   std::vector<Vec3> correspondence;
   std::vector<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
   std::vector<double> curvature_iterated, curvature_other;
-  std::vector<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other, hue_difference;
+  std::vector<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other,
+      hue_difference;
   /// Which of p's quadric fits are underdetermined (quadric_fit.h): kCurvatureFit, kMatchFit.
   std::vector<std::uint8_t> underdetermined;
   std::vector<Lab> lab_iterated, lab_other;                              // diagnostics only
@@ -120,14 +121,15 @@ bool same_coordinates(const std::vector<Vec3>& a_points, const std::vector<Neigh
 /// lists sorted by distance. The fit is a pure function of the neighbour coordinates, so when
 /// both lists hold the same coordinates (unchanged geometry) it is computed once.
 void curvatures(std::size_t i, const Clouds& c, const DirectionParams& params,
-                const std::vector<Neighbour>& within_other, const std::vector<Neighbour>& within_iterated,
-                QuadricFitter& fitter, PointData& out) {
+                const std::vector<Neighbour>& within_other,
+                const std::vector<Neighbour>& within_iterated, QuadricFitter& fitter,
+                PointData& out) {
   const Vec3& p = c.iterated_tree.points()[i];
   const QuadricFit on_other = fitter.fit(p, c.other_tree.points(), within_other);
-  const QuadricFit on_iterated =
-      same_coordinates(c.other_tree.points(), within_other, c.iterated_tree.points(), within_iterated)
-          ? on_other
-          : fitter.fit(p, c.iterated_tree.points(), within_iterated);
+  const QuadricFit on_iterated = same_coordinates(c.other_tree.points(), within_other,
+                                                  c.iterated_tree.points(), within_iterated)
+                                     ? on_other
+                                     : fitter.fit(p, c.iterated_tree.points(), within_iterated);
   out.curvature_other[i] = std::abs(on_other.mean_curvature) * params.max_dim;
   out.curvature_iterated[i] = std::abs(on_iterated.mean_curvature) * params.max_dim;
   if (on_other.underdetermined || on_iterated.underdetermined) {
@@ -231,10 +233,15 @@ void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, cons
   const Vec3& p = c.iterated_tree.points()[i];
   const std::uint32_t nearest =
       match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
+  // The matched colour is read after the curvature fits: its cache miss (colours are in input
+  // order, points in tree order) resolves meanwhile.
+  __builtin_prefetch(&c.other.colors[c.other_tree.input_index()[nearest]]);
   out.correspondence_is_point[i] = out.correspondence[i] == p;
-  const std::vector<Neighbour>& within_iterated = c.same_positions ? s.within_other : s.within_iterated;
+  const std::vector<Neighbour>& within_iterated =
+      c.same_positions ? s.within_other : s.within_iterated;
   if (!c.same_positions) {
-    sorted_within(c.iterated_tree, s.near_iterated, p, radii.curvature2, s.ties_iterated, s.within_iterated);
+    sorted_within(c.iterated_tree, s.near_iterated, p, radii.curvature2, s.ties_iterated,
+                  s.within_iterated);
   }
   if (!out.count_radius_other.empty()) {
     out.count_radius_other[i] = static_cast<std::uint32_t>(s.within_other.size());
@@ -245,12 +252,15 @@ void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, cons
 }
 
 void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
-                 const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
-                 Stage1Scratch& s, PointData& out) {
+                  const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
+                  Stage1Scratch& s, PointData& out) {
   const Box box = box_of(c.iterated_tree.points(), batch[0], batch[1]);
   s.near_other.gather(c.other_tree, box, radii.curvature2);
   s.have_reach = false;
   if (!c.same_positions) s.near_iterated.gather(c.iterated_tree, box, radii.curvature2);
+  for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
+    __builtin_prefetch(&c.iterated.colors[c.iterated_tree.input_index()[i]]);
+  }
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     stage1_point(batch, i, c, params, radii, table, s, out);
   }
@@ -288,9 +298,10 @@ void for_each_batch(const KdTree& tree, int threads, Visit&& visit) {
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
                  const Lab2000hlTable& table) {
   PointData out(c.iterated_tree.size(), params.diagnostics);
-  for_each_batch<Stage1Scratch>(c.iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
-    stage1_batch(batch, c, params, radii, table, scratch, out);
-  });
+  for_each_batch<Stage1Scratch>(c.iterated_tree, params.threads,
+                                [&](const auto& batch, auto& scratch) {
+                                  stage1_batch(batch, c, params, radii, table, scratch, out);
+                                });
   return out;
 }
 
@@ -332,9 +343,16 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
 /// f1..f3 and s4..s8 (similarities, pooled as the reference pools them) of the points of one
 /// batch, stored at their input indices.
 void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& iterated_tree,
-                 const PointData& d, const Radii& radii, Stage2Scratch& s,
-                 std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
-  s.candidates.gather(iterated_tree, box_of(iterated_tree.points(), batch[0], batch[1]), radii.statistics2);
+                  const PointData& d, const Radii& radii, Stage2Scratch& s,
+                  std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
+  // Features are stored in input order (a cache miss per point): announced before the work.
+  for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
+    const FeatureVector& f = features[iterated_tree.input_index()[i]];
+    __builtin_prefetch(&f.front(), 1);
+    __builtin_prefetch(&f.back(), 1);
+  }
+  s.candidates.gather(iterated_tree, box_of(iterated_tree.points(), batch[0], batch[1]),
+                      radii.statistics2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     s.candidates.radius(iterated_tree.points()[i], radii.statistics2, s.within);
     gather_samples(i, d, radii, s);
@@ -348,9 +366,10 @@ std::vector<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& 
                                   const DirectionParams& params, const Radii& radii,
                                   std::vector<std::uint32_t>* counts) {
   std::vector<FeatureVector> features(iterated_tree.size());
-  for_each_batch<Stage2Scratch>(iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
-    stage2_batch(batch, iterated_tree, d, radii, scratch, features, counts);
-  });
+  for_each_batch<Stage2Scratch>(
+      iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
+        stage2_batch(batch, iterated_tree, d, radii, scratch, features, counts);
+      });
   return features;
 }
 
@@ -483,8 +502,8 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
   out.pooled = mean_features_from_similarities(out.features);
   std::uint8_t too_common = 0;
   for (std::uint8_t kind : {kCurvatureFit, kMatchFit}) {
-    std::size_t& count = kind == kCurvatureFit ? out.underdetermined_curvature
-                                               : out.underdetermined_match;
+    std::size_t& count =
+        kind == kCurvatureFit ? out.underdetermined_curvature : out.underdetermined_match;
     for (std::uint8_t u : data.underdetermined) count += (u & kind) != 0;
     if (count > kUnderdeterminedShare * double(iterated_tree.size())) too_common |= kind;
   }
