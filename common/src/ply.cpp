@@ -11,6 +11,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/large_arrays.h"
 
 namespace qm3d::ply {
 namespace {
@@ -278,8 +279,8 @@ ColorEncoding color_encoding(const Element& e, const VertexLayout& l, const std:
 void read_vertices(Cursor& cur, const Element& e, const std::string& name, Content& out) {
   const VertexLayout l = vertex_layout(e, name);
   out.color_encoding = color_encoding(e, l, name);
-  out.positions.resize(e.count);
-  if (out.color_encoding != ColorEncoding::kNone) out.colors.resize(e.count);
+  resize_with_huge_pages(out.positions, e.count);
+  if (out.color_encoding != ColorEncoding::kNone) resize_with_huge_pages(out.colors, e.count);
   std::vector<double> values(e.properties.size());
   std::string where;
   for (std::uint64_t i = 0; i < e.count; ++i) {

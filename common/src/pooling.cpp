@@ -18,19 +18,19 @@ double minkowski_pool(const std::vector<double>& values, double p) {
   return std::pow(sum / static_cast<double>(values.size()), 1.0 / p);
 }
 
-FeatureVector mean_features(const std::vector<FeatureVector>& per_element) {
+FeatureVector mean_features(const FeatureVector* per_element, std::size_t count) {
   FeatureVector sum{};
-  for (const auto& f : per_element) {
-    for (std::size_t k = 0; k < kNumFeatures; ++k) sum[k] += f[k];
+  for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t k = 0; k < kNumFeatures; ++k) sum[k] += per_element[i][k];
   }
-  if (per_element.empty()) return sum;
-  for (auto& s : sum) s /= static_cast<double>(per_element.size());
+  if (count == 0) return sum;
+  for (auto& s : sum) s /= static_cast<double>(count);
   return sum;
 }
 
-FeatureVector mean_features_from_similarities(const std::vector<FeatureVector>& per_element) {
-  if (per_element.empty()) return FeatureVector{};
-  FeatureVector pooled = mean_features(per_element);
+FeatureVector mean_features_from_similarities(const FeatureVector* per_element, std::size_t count) {
+  if (count == 0) return FeatureVector{};
+  FeatureVector pooled = mean_features(per_element, count);
   similarities_to_features(pooled);
   return pooled;
 }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "qm3d/common/large_arrays.h"
+
 namespace qm3d::pointcloud::detail {
 namespace {
 
@@ -51,7 +53,8 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
   }
   if (points.empty()) return;
   // nanoflann's vind, initially the input order; computeBoundingBox: the tight box.
-  std::vector<std::uint32_t> order(points.size());
+  std::vector<std::uint32_t> order;
+  resize_with_huge_pages(order, points.size());
   for (std::size_t i = 0; i < points.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
   for (int a = 0; a < 3; ++a) root_box_[a] = {points[0][a], points[0][a]};
   for (const Vec3& p : points) {
@@ -69,7 +72,7 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
 #pragma omp single
   build(order, 0, points.size(), box, nodes_);
   input_ = nullptr;
-  points_.resize(points.size());
+  resize_with_huge_pages(points_, points.size());
   input_index_ = std::move(order);
   for (std::size_t i = 0; i < points_.size(); ++i) points_[i] = points[input_index_[i]];
   index_leaves();
@@ -141,7 +144,9 @@ void KdTree::build(std::vector<std::uint32_t>& order, std::size_t left, std::siz
   }
   const double split_val = (box[cut][0] + box[cut][1]) / 2;
   const auto range = min_max(cut);
-  const double cutval = split_val < range[0] ? range[0] : split_val > range[1] ? range[1] : split_val;
+  const double cutval = split_val < range[0]   ? range[0]
+                        : split_val > range[1] ? range[1]
+                                               : split_val;
 
   // planeSplit: two Hoare passes, < cutval then <= cutval.
   const auto pass = [&](std::size_t l, auto goes_left) {

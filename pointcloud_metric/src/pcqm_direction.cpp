@@ -15,6 +15,7 @@
 #include "candidate_set.h"
 #include "kd_tree.h"
 #include "pcqm_internal.h"
+#include "qm3d/common/large_arrays.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/statistics.h"
 #include "quadric_fit.h"
@@ -51,19 +52,17 @@ double point_distance(const Vec3& a, const Vec3& b) {
                    (b[2] - a[2]) * (b[2] - a[2]));
 }
 
-/// Stage-1 values of each point of the iterated cloud, in its tree order.
+/// Stage-1 values of each point of the iterated cloud, in its tree order. Stage 1 writes every
+/// element (in parallel: no serial zeroing pass), `underdetermined` by bits.
 struct PointData {
-  explicit PointData(std::size_t n, bool diagnostics)
-      : correspondence(n),
-        correspondence_is_point(n),
-        curvature_iterated(n),
-        curvature_other(n),
-        lightness_iterated(n),
-        lightness_other(n),
-        chroma_iterated(n),
-        chroma_other(n),
-        hue_difference(n),
-        underdetermined(n) {
+  explicit PointData(std::size_t n, bool diagnostics) {
+    correspondence.resize(n);
+    correspondence_is_point.resize(n);
+    for (auto* v : {&curvature_iterated, &curvature_other, &lightness_iterated, &lightness_other,
+                    &chroma_iterated, &chroma_other, &hue_difference}) {
+      v->resize(n);
+    }
+    underdetermined.resize(n, 0);
     if (diagnostics) {
       lab_iterated.resize(n);
       lab_other.resize(n);
@@ -71,13 +70,13 @@ struct PointData {
       count_radius_iterated.resize(n);
     }
   }
-  std::vector<Vec3> correspondence;
-  std::vector<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
-  std::vector<double> curvature_iterated, curvature_other;
-  std::vector<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other,
+  LargeArray<Vec3> correspondence;
+  LargeArray<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
+  LargeArray<double> curvature_iterated, curvature_other;
+  LargeArray<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other,
       hue_difference;
   /// Which of p's quadric fits are underdetermined (quadric_fit.h): kCurvatureFit, kMatchFit.
-  std::vector<std::uint8_t> underdetermined;
+  LargeArray<std::uint8_t> underdetermined;
   std::vector<Lab> lab_iterated, lab_other;                              // diagnostics only
   std::vector<std::uint32_t> count_radius_other, count_radius_iterated;  // diagnostics only
 };
@@ -344,7 +343,7 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
 /// batch, stored at their input indices.
 void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& iterated_tree,
                   const PointData& d, const Radii& radii, Stage2Scratch& s,
-                  std::vector<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
+                  LargeArray<FeatureVector>& features, std::vector<std::uint32_t>* counts) {
   // Features are stored in input order (a cache miss per point): announced before the work.
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     const FeatureVector& f = features[iterated_tree.input_index()[i]];
@@ -362,10 +361,10 @@ void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& itera
   }
 }
 
-std::vector<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& d,
-                                  const DirectionParams& params, const Radii& radii,
-                                  std::vector<std::uint32_t>* counts) {
-  std::vector<FeatureVector> features(iterated_tree.size());
+LargeArray<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& d,
+                                 const DirectionParams& params, const Radii& radii,
+                                 std::vector<std::uint32_t>* counts) {
+  LargeArray<FeatureVector> features(iterated_tree.size());  // each written by stage 2
   for_each_batch<Stage2Scratch>(
       iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
         stage2_batch(batch, iterated_tree, d, radii, scratch, features, counts);
@@ -373,9 +372,10 @@ std::vector<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& 
   return features;
 }
 
-template <typename T>
-std::vector<T> to_input_order(const std::vector<T>& tree_order, const KdTree& tree) {
-  std::vector<T> out(tree_order.size());
+template <typename Array>
+std::vector<typename Array::value_type> to_input_order(const Array& tree_order,
+                                                       const KdTree& tree) {
+  std::vector<typename Array::value_type> out(tree_order.size());
   for (std::size_t i = 0; i < tree_order.size(); ++i) out[tree.input_index()[i]] = tree_order[i];
   return out;
 }
@@ -499,7 +499,7 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
   if (p.diagnostics) counts.resize(iterated_tree.size());
   stage("features");
   out.features = stage2(iterated_tree, data, p, radii, p.diagnostics ? &counts : nullptr);
-  out.pooled = mean_features_from_similarities(out.features);
+  out.pooled = mean_features_from_similarities(out.features.data(), out.features.size());
   std::uint8_t too_common = 0;
   for (std::uint8_t kind : {kCurvatureFit, kMatchFit}) {
     std::size_t& count =

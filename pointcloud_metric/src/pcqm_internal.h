@@ -8,6 +8,7 @@
 
 #include "qm3d/common/color.h"
 #include "qm3d/common/features.h"
+#include "qm3d/common/large_arrays.h"
 #include "qm3d/common/progress.h"
 #include "qm3d/common/types.h"
 
@@ -31,15 +32,15 @@ inline constexpr int kProgressSteps = 3;
 
 /// Per-point intermediate values, in the iterated cloud's input order (SPEC-PCQM 1.4, 1.5).
 struct PointDiagnostics {
-  std::vector<Vec3> correspondence;    ///< p-hat: foot point on D or nn_D(p)
-  std::vector<double> curvature_iterated;   ///< k_R = |H| maxDim from R's points within r
-  std::vector<double> curvature_other;  ///< k_D = |H| maxDim from D's points within r
-  std::vector<Lab> lab_iterated;            ///< LAB2000HL of p's colour
-  std::vector<Lab> lab_other;           ///< LAB2000HL of nn_D(p)'s colour
+  std::vector<Vec3> correspondence;        ///< p-hat: foot point on D or nn_D(p)
+  std::vector<double> curvature_iterated;  ///< k_R = |H| maxDim from R's points within r
+  std::vector<double> curvature_other;     ///< k_D = |H| maxDim from D's points within r
+  std::vector<Lab> lab_iterated;           ///< LAB2000HL of p's colour
+  std::vector<Lab> lab_other;              ///< LAB2000HL of nn_D(p)'s colour
   std::vector<double> chroma_iterated, chroma_other, hue_difference;
-  std::vector<std::uint32_t> count_radius_other;  ///< #D points within r
-  std::vector<std::uint32_t> count_radius_iterated;   ///< #R points within r
-  std::vector<std::uint32_t> count_statistics;   ///< #R points within radius_factor r
+  std::vector<std::uint32_t> count_radius_other;     ///< #D points within r
+  std::vector<std::uint32_t> count_radius_iterated;  ///< #R points within r
+  std::vector<std::uint32_t> count_statistics;       ///< #R points within radius_factor r
   /// Bits kCurvatureFit (k_D's or k_R's fit) and kMatchFit (p-hat's fit) when underdetermined.
   std::vector<std::uint8_t> underdetermined;
 };
@@ -59,7 +60,7 @@ struct Suggestion {
 
 struct DirectionOutput {
   /// f1..f8 of each point (f4..f8 as 1 - similarity), in the iterated cloud's input order.
-  std::vector<FeatureVector> features;
+  LargeArray<FeatureVector> features;
   /// F1..F8 pooled as the reference pools them (pooling.h mean_features_from_similarities).
   FeatureVector pooled{};
   /// Points whose k_D or k_R fit, and points whose p-hat fit, is underdetermined

@@ -1,6 +1,7 @@
 // Pooling of per-element values into one score, and linear feature models.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -15,13 +16,20 @@ double mean_pool(const std::vector<double>& values);
 double minkowski_pool(const std::vector<double>& values, double p);
 
 /// Component-wise mean of per-element feature vectors, summed in element order.
-FeatureVector mean_features(const std::vector<FeatureVector>& per_element);
+FeatureVector mean_features(const FeatureVector* per_element, std::size_t count);
+inline FeatureVector mean_features(const std::vector<FeatureVector>& per_element) {
+  return mean_features(per_element.data(), per_element.size());
+}
 
 /// MEPP-team/PCQM's pooling (`write_mean_features`): from per-element f1..f3 and s4..s8 (the
 /// similarities, features.h local_features_and_similarities), F1..F3 = (sum f) / n and
 /// F4..F8 = 1 - (sum s) / n, summed in element order. Differs from mean_features of 1 - s by
 /// rounding only (about 1e-14 absolute), visible on near-zero scores. Empty -> all 0.
-FeatureVector mean_features_from_similarities(const std::vector<FeatureVector>& per_element);
+FeatureVector mean_features_from_similarities(const FeatureVector* per_element, std::size_t count);
+inline FeatureVector mean_features_from_similarities(
+    const std::vector<FeatureVector>& per_element) {
+  return mean_features_from_similarities(per_element.data(), per_element.size());
+}
 
 /// A metric's score as a weighted sum of its (pooled) features.
 struct LinearModel {
