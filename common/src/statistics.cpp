@@ -4,12 +4,6 @@
 
 namespace qm3d {
 
-double gaussian_weight(double distance, double sigma) {
-  // Written as in MEPP2 cmdm.h and PCQM main.cpp so that the weights round the same way.
-  return 1.0 / sigma / std::sqrt(2 * 3.141592) *
-         std::exp(-(distance * distance) / 2.0 / sigma / sigma);
-}
-
 double population_sd(const std::vector<double>& x, double mean) {
   double sum = 0;
   for (double v : x) sum += (v - mean) * (v - mean);
