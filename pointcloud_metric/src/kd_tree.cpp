@@ -63,7 +63,10 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
       if (p[a] > root_box_[a][1]) root_box_[a][1] = p[a];
     }
   }
-  input_ = &points;
+  // The points are permuted along with their indices (same swaps as nanoflann's vind): the
+  // build reads them contiguously, and the result is the tree-order copy.
+  resize_with_huge_pages(points_, points.size());
+  std::copy(points.begin(), points.end(), points_.begin());
   Bounds box = root_box_;
   nodes_.reserve(points.size() / 3);
 #pragma omp parallel num_threads( \
@@ -71,10 +74,7 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
                 : omp_get_max_threads()) if (!omp_in_parallel() && points.size() > kTaskThreshold)
 #pragma omp single
   build(order, 0, points.size(), box, nodes_);
-  input_ = nullptr;
-  resize_with_huge_pages(points_, points.size());
   input_index_ = std::move(order);
-  for (std::size_t i = 0; i < points_.size(); ++i) points_[i] = points[input_index_[i]];
   index_leaves();
 }
 
@@ -98,33 +98,39 @@ void KdTree::index_leaves() {
 // subtree to `out` in pre-order (first child = next node). On entry `box` is the inherited box;
 // on return it is the tight box of the subtree's points.
 void KdTree::build(std::vector<std::uint32_t>& order, std::size_t left, std::size_t right,
-                   Bounds& box, std::vector<Node>& out) const {
-  const std::vector<Vec3>& p = *input_;
+                   Bounds& box, std::vector<Node>& out) {
   const std::size_t self = out.size();
   out.emplace_back();
-  if (right - left <= kLeafSize) {
+  Vec3* pts = points_.data() + left;  // order[left + i] is the input index of pts[i]
+  const std::size_t count = right - left;
+  if (count <= kLeafSize) {
     out[self].divfeat = kLeaf;
     out[self].first = static_cast<std::uint32_t>(left);
     out[self].last = static_cast<std::uint32_t>(right);
-    for (int a = 0; a < 3; ++a) box[a] = {p[order[left]][a], p[order[left]][a]};
-    for (std::size_t k = left + 1; k < right; ++k) {
+    for (int a = 0; a < 3; ++a) box[a] = {pts[0][a], pts[0][a]};
+    for (std::size_t k = 1; k < count; ++k) {
       for (int a = 0; a < 3; ++a) {
-        if (box[a][0] > p[order[k]][a]) box[a][0] = p[order[k]][a];
-        if (box[a][1] < p[order[k]][a]) box[a][1] = p[order[k]][a];
+        if (box[a][0] > pts[k][a]) box[a][0] = pts[k][a];
+        if (box[a][1] < pts[k][a]) box[a][1] = pts[k][a];
       }
     }
     return;
   }
   std::uint32_t* ind = order.data() + left;
-  const std::size_t count = right - left;
-  const auto min_max = [&](int axis) {
-    std::array<double, 2> r{p[ind[0]][axis], p[ind[0]][axis]};
-    for (std::size_t i = 1; i < count; ++i) {
-      const double v = p[ind[i]][axis];
-      if (v < r[0]) r[0] = v;
-      if (v > r[1]) r[1] = v;
+  std::array<std::array<double, 2>, 3> ranges{};
+  std::array<bool, 3> have_range{};
+  const auto min_max = [&](int axis) {  // computeMinMax, once per axis and node
+    if (!have_range[axis]) {
+      std::array<double, 2> r{pts[0][axis], pts[0][axis]};
+      for (std::size_t i = 1; i < count; ++i) {
+        const double v = pts[i][axis];
+        if (v < r[0]) r[0] = v;
+        if (v > r[1]) r[1] = v;
+      }
+      ranges[axis] = r;
+      have_range[axis] = true;
     }
-    return r;
+    return ranges[axis];
   };
 
   // middleSplit_: the spread is measured along the dim chosen so far, not along the candidate.
@@ -152,10 +158,11 @@ void KdTree::build(std::vector<std::uint32_t>& order, std::size_t left, std::siz
   const auto pass = [&](std::size_t l, auto goes_left) {
     std::size_t r = count - 1;
     for (;;) {
-      while (l <= r && goes_left(p[ind[l]][cut])) ++l;
-      while (r != 0 && l <= r && !goes_left(p[ind[r]][cut])) --r;
+      while (l <= r && goes_left(pts[l][cut])) ++l;
+      while (r != 0 && l <= r && !goes_left(pts[r][cut])) --r;
       if (l > r || r == 0) break;
       std::swap(ind[l], ind[r]);
+      std::swap(pts[l], pts[r]);
       ++l;
       --r;
     }

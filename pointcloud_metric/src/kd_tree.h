@@ -104,18 +104,19 @@ class KdTree {
 
  private:
   struct Node {
-    double divlow = 0;        // inner: largest coordinate of the first child along divfeat
-    double divhigh = 0;       // inner: smallest coordinate of the second child along divfeat
+    double divlow = 0;          // inner: largest coordinate of the first child along divfeat
+    double divhigh = 0;         // inner: smallest coordinate of the second child along divfeat
     std::uint32_t divfeat = 0;  // inner: 0..2, leaf: kLeaf
-    std::uint32_t child2 = 0;   // inner: the second child (the first is the next node); leaf: its index in leaves_
-    std::uint32_t first = 0;    // leaf: first point
-    std::uint32_t last = 0;     // leaf: one past the last point
+    std::uint32_t child2 =
+        0;  // inner: the second child (the first is the next node); leaf: its index in leaves_
+    std::uint32_t first = 0;  // leaf: first point
+    std::uint32_t last = 0;   // leaf: one past the last point
   };
   using Bounds = std::array<std::array<double, 2>, 3>;  // per axis {low, high}
   static constexpr std::uint32_t kLeaf = 3;
 
   void build(std::vector<std::uint32_t>& order, std::size_t left, std::size_t right, Bounds& box,
-             std::vector<Node>& out) const;
+             std::vector<Node>& out);
   void index_leaves();
   template <typename Set>
   void search_level(Set& set, const Vec3& query, std::uint32_t node, double mindist,
@@ -123,7 +124,6 @@ class KdTree {
   template <typename Set>
   void search(Set& set, const Vec3& query) const;
 
-  const std::vector<Vec3>* input_ = nullptr;  // during the build only
   std::vector<Vec3> points_;
   std::vector<std::uint32_t> input_index_;
   std::vector<Node> nodes_;
