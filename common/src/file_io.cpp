@@ -10,7 +10,6 @@
 #include <system_error>
 
 #include "qm3d/common/error.h"
-#include "qm3d/common/large_arrays.h"
 
 namespace qm3d {
 
@@ -31,8 +30,6 @@ std::string read_file_bytes(const std::filesystem::path& path, std::uintmax_t ma
   std::string bytes;
   if (!ec) {
     // Regular file of known size: one allocation, no intermediate copy.
-    bytes.reserve(static_cast<std::size_t>(size));
-    advise_huge_pages(bytes.data(), static_cast<std::size_t>(size));
     bytes.resize(static_cast<std::size_t>(size));
     in.read(bytes.data(), static_cast<std::streamsize>(size));
     if (in.gcount() != static_cast<std::streamsize>(size)) {
