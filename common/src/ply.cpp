@@ -279,8 +279,12 @@ ColorEncoding color_encoding(const Element& e, const VertexLayout& l, const std:
 void read_vertices(Cursor& cur, const Element& e, const std::string& name, Content& out) {
   const VertexLayout l = vertex_layout(e, name);
   out.color_encoding = color_encoding(e, l, name);
-  resize_with_huge_pages(out.positions, e.count);
-  if (out.color_encoding != ColorEncoding::kNone) resize_with_huge_pages(out.colors, e.count);
+  reserve_with_huge_pages(out.positions, e.count);
+  out.positions.resize(e.count);
+  if (out.color_encoding != ColorEncoding::kNone) {
+    reserve_with_huge_pages(out.colors, e.count);
+    out.colors.resize(e.count);
+  }
   std::vector<double> values(e.properties.size());
   std::string where;
   for (std::uint64_t i = 0; i < e.count; ++i) {

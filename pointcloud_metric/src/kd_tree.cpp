@@ -54,7 +54,8 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
   if (points.empty()) return;
   // nanoflann's vind, initially the input order; computeBoundingBox: the tight box.
   std::vector<std::uint32_t> order;
-  resize_with_huge_pages(order, points.size());
+  reserve_with_huge_pages(order, points.size());
+  order.resize(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
   for (int a = 0; a < 3; ++a) root_box_[a] = {points[0][a], points[0][a]};
   for (const Vec3& p : points) {
@@ -65,8 +66,8 @@ KdTree::KdTree(const std::vector<Vec3>& points, int threads) {
   }
   // The points are permuted along with their indices (same swaps as nanoflann's vind): the
   // build reads them contiguously, and the result is the tree-order copy.
-  resize_with_huge_pages(points_, points.size());
-  std::copy(points.begin(), points.end(), points_.begin());
+  reserve_with_huge_pages(points_, points.size());
+  points_.assign(points.begin(), points.end());
   Bounds box = root_box_;
   nodes_.reserve(points.size() / 3);
 #pragma omp parallel num_threads( \

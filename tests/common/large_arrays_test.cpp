@@ -42,13 +42,18 @@ TEST(HugePages, AdviceIsAHintForAnyRange) {
   std::vector<std::uint8_t> small(100);
   advise_huge_pages(small.data(), small.size());
   std::vector<std::uint8_t> big;
-  resize_with_huge_pages(big, 9u << 20);
+  reserve_with_huge_pages(big, 9u << 20);
+  EXPECT_GE(big.capacity(), 9u << 20);
+  big.resize(9u << 20);
   EXPECT_EQ(big.size(), 9u << 20);
   EXPECT_EQ(big[123], 0);  // std::vector's resize still value-initialises
   big[5] = 7;
-  resize_with_huge_pages(big, 20u << 20);  // grows, keeping the elements
+  reserve_with_huge_pages(big, 20u << 20);  // grows, keeping the elements
+  EXPECT_GE(big.capacity(), 20u << 20);
+  EXPECT_EQ(big.size(), 9u << 20);
   EXPECT_EQ(big[5], 7);
-  EXPECT_EQ(big.back(), 0);
+  reserve_with_huge_pages(big, 1);  // already room: nothing changes
+  EXPECT_EQ(big[5], 7);
 }
 
 }  // namespace

@@ -17,17 +17,13 @@ namespace qm3d {
 /// 4 MiB and wherever the system refuses (a hint only). Call it before the memory is written.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
-/// Resizes `v` to n elements, advising huge pages for a new allocation before it is filled.
+/// Reserves room for n elements in `v` and advises huge pages for it; call it before filling
+/// (resize, assign) an empty vector.
 template <typename T>
-void resize_with_huge_pages(std::vector<T>& v, std::size_t n) {
-  if (n > v.capacity()) {
-    std::vector<T> grown;
-    grown.reserve(n);
-    advise_huge_pages(grown.data(), n * sizeof(T));
-    grown.insert(grown.end(), v.begin(), v.end());
-    v.swap(grown);
-  }
-  v.resize(n);
+void reserve_with_huge_pages(std::vector<T>& v, std::size_t n) {
+  if (n <= v.capacity()) return;
+  v.reserve(n);
+  advise_huge_pages(v.data(), n * sizeof(T));
 }
 
 /// std::allocator that advises huge pages for large blocks and default-initialises: resize(n)
