@@ -123,7 +123,9 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
   try {
     const Input r = registry().read(ref), d = registry().read(dist);
     const auto specs = metrics_for(metric, r, d);
-    MetricResult result = score(*specs.front(), r, d, o.request);
+    ScoreRequest request = o.request;
+    request.release_inputs = o.report_dir.empty();  // a report reads both inputs
+    MetricResult result = score(*specs.front(), r, d, request);
     result.provenance.reference = pair.reference;
     result.provenance.distorted = pair.distorted;
     ScoredRow s{csv_row(result), false, specs.front(), std::nullopt, r, d};

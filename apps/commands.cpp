@@ -50,6 +50,12 @@ MetricResult score(const MetricSpec& spec, const Input& reference, const Input& 
                    const ScoreRequest& request, const std::filesystem::path& map) {
   RunOptions run = run_options_for(spec, request);
   run.per_element = request.keep_per_element || !map.empty();
+  if (request.release_inputs && map.empty()) {
+    run.inputs_done = [&reference, &distorted] {
+      reference.release();
+      distorted.release();
+    };
+  }
   MetricResult result =
       run_metric(spec, reference, distorted, run, options_for(spec, request.options));
   if (!map.empty()) write_map(map, spec, result, reference, distorted);

@@ -27,6 +27,10 @@ struct ScoreRequest {
   bool model_any_metric = false;
   /// Keep the per-element values in the result (for a report) even when no map is written.
   bool keep_per_element = false;
+  /// The caller uses neither input after this metric: what was read from their files is freed
+  /// as soon as the metric holds its own copies (lower peak memory). Ignored when a map is
+  /// written (it needs the iterated input's geometry).
+  bool release_inputs = false;
 };
 
 /// The metrics a command or a batch row names for the pair: a metric's name, "auto" (the first

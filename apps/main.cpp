@@ -145,6 +145,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   for (const MetricSpec* spec : chosen) {
     ScoreRequest r = request;
     if (show) r.run.progress = stderr_progress(spec->title, stderr_is_terminal());
+    r.release_inputs = !report && spec == chosen.back();  // a report reads both inputs
     results.push_back(score(*spec, ref, dist, r, c.spec ? cli.out.map : std::string()));
   }
   print_warnings(results, g.quiet);

@@ -243,6 +243,14 @@ void Input::load(Kind as) const {
   }
 }
 
+void Input::release() const {
+  State& s = *state_;
+  std::lock_guard<std::mutex> lock(s.mutex);
+  if (s.path.empty()) return;  // data in memory cannot be read again
+  s.mesh.reset();
+  s.cloud.reset();
+}
+
 // ---------------------------------------------------------------------------------------------
 // Metric specs and the registry
 

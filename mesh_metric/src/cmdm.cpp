@@ -33,7 +33,7 @@ MetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& disto
     }
   };
   const detail::MultiscaleRun run{direction, options.scales, options.threads, table.get(),
-                                  options.progress};
+                                  options.progress, options.inputs_done};
   MetricResult result =
       detail::run_multiscale(reference, distorted, detail::kCmdmDefinition, run, pool);
   result.metric = "cmdm";
@@ -69,9 +69,10 @@ MetricSpec cmdm_spec() {
              const OptionValues& values) {
     auto o = detail::with_run_options<CmdmOptions>(run);
     o.scales = values.at("scales").get<int>();
+    std::vector<std::string> warnings = detail::reader_warnings(ref, dist);
     MetricResult r = compute_cmdm(detail::input_mesh(ref, true, spec.title),
                                   detail::input_mesh(dist, true, spec.title), o);
-    detail::add_reader_warnings(r, ref, dist);
+    detail::prepend_warnings(r, std::move(warnings));
     return r;
   };
   return s;

@@ -107,6 +107,21 @@ ArrayView<T> view_of(const std::vector<T>& v) {
   return ArrayView<T>{v.data(), v.size()};
 }
 
+}  // namespace
+
+void HalfedgeMesh::detach() {
+  if (positions.begin() != owned_positions.data()) {
+    owned_positions.assign(positions.begin(), positions.end());
+    positions = view_of(owned_positions);
+  }
+  if (triangles.begin() != owned_triangles.data()) {
+    owned_triangles.assign(triangles.begin(), triangles.end());
+    triangles = view_of(owned_triangles);
+  }
+}
+
+namespace {
+
 // The input's triangles without those that repeat a vertex (owned only when some were dropped).
 void valid_triangles(const ColoredMesh& mesh, const std::string& name, HalfedgeMesh& out) {
   std::size_t repeated = 0;

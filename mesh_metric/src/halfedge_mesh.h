@@ -36,8 +36,9 @@ struct ArrayView {
   const T* end() const { return ptr + count; }
 };
 
-/// A triangle mesh ready for the metric: positions, triangles, vertex rings with edge angles. Positions and triangles are the input
-/// mesh's own arrays (no copy) unless a repair had to change them; the input must outlive this.
+/// A triangle mesh ready for the metric: positions, triangles, vertex rings with edge angles.
+/// Positions and triangles are the input mesh's own arrays (no copy) unless a repair had to
+/// change them or detach() was called; the input must outlive the views.
 struct HalfedgeMesh {
   HalfedgeMesh() = default;
   HalfedgeMesh(HalfedgeMesh&&) = default;
@@ -53,9 +54,14 @@ struct HalfedgeMesh {
   std::vector<std::uint32_t> input_vertex;
   std::vector<std::string> warnings;
 
-  // Storage used only when the input had to be repaired (views above point here then).
+  // Storage used when the input had to be repaired, or after detach() (views above point here
+  // then).
   std::vector<Vec3> owned_positions;
   std::vector<Triangle> owned_triangles;
+
+  /// Copies the arrays still viewed in the input into the mesh's own storage: the input may be
+  /// freed afterwards.
+  void detach();
 };
 
 /// Builds the connectivity and the edges' dihedral angles under `degenerate_edges`. Faces with a

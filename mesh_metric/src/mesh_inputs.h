@@ -18,13 +18,18 @@ inline const ColoredMesh& input_mesh(const Input& input, bool colors, const std:
   return m.mesh;
 }
 
-/// The readers' repairs of both meshes, before the metric's own warnings.
-inline void add_reader_warnings(MetricResult& r, const Input& reference, const Input& distorted) {
+/// The readers' repairs of both meshes (taken before the metric runs: it may free its inputs).
+inline std::vector<std::string> reader_warnings(const Input& reference, const Input& distorted) {
   std::vector<std::string> all = reference.mesh().warnings;
   const auto& d = distorted.mesh().warnings;
   all.insert(all.end(), d.begin(), d.end());
-  all.insert(all.end(), r.warnings.begin(), r.warnings.end());
-  r.warnings = std::move(all);
+  return all;
+}
+
+/// `first` (the readers' repairs) before the metric's own warnings.
+inline void prepend_warnings(MetricResult& r, std::vector<std::string> first) {
+  first.insert(first.end(), r.warnings.begin(), r.warnings.end());
+  r.warnings = std::move(first);
 }
 
 /// The run options as a metric's options type (CmdmOptions, Msdm2Options).

@@ -36,7 +36,7 @@ MetricResult compute_msdm2(const ColoredMesh& reference, const ColoredMesh& dist
     if (options.per_element) r.per_element = std::move(local);
   };
   const detail::MultiscaleRun run{direction, options.scales, options.threads, nullptr,
-                                  options.progress};
+                                  options.progress, options.inputs_done};
   MetricResult result =
       detail::run_multiscale(reference, distorted, detail::kMsdm2Definition, run, pool);
   result.metric = "msdm2";
@@ -67,9 +67,10 @@ MetricSpec msdm2_spec() {
              const OptionValues& values) {
     auto o = detail::with_run_options<Msdm2Options>(run);
     o.scales = values.at("scales").get<int>();
+    std::vector<std::string> warnings = detail::reader_warnings(ref, dist);
     MetricResult r = compute_msdm2(detail::input_mesh(ref, false, spec.title),
                                    detail::input_mesh(dist, false, spec.title), o);
-    detail::add_reader_warnings(r, ref, dist);
+    detail::prepend_warnings(r, std::move(warnings));
     return r;
   };
   return s;

@@ -51,6 +51,8 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
                      const MultiscaleDefinition& def, int threads) {
   PreparedMesh p;
   p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges, threads);
+  // A caller that frees its inputs early trades their colours for a copy of the geometry.
+  if (run.inputs_done) p.mesh.detach();
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
@@ -207,6 +209,7 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
       std::async(concurrent ? std::launch::async : std::launch::deferred, prepare_ref);
   const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def, per_task);
   const PreparedMesh ref = ref_task.get();
+  if (run.inputs_done) run.inputs_done();  // both meshes detached: the inputs are not read below
   MetricResult result;
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());

@@ -67,6 +67,8 @@ struct MultiscaleRun {
   int threads = 0;
   const Lab2000hlTable* colors = nullptr;  ///< required when the definition uses colour
   ProgressCallback progress;               ///< optional: told each stage as it starts
+  /// Optional: called once both meshes are prepared (the inputs are not read afterwards).
+  std::function<void()> inputs_done;
 };
 
 /// Runs a metric on a pair of meshes: prepares both, computes the requested directions, and

@@ -128,7 +128,7 @@ DirectionResult direction(const ColoredCloud& iterated, const ColoredCloud& othe
                           const std::string& iterated_name, const PcqmOptions& o,
                           const LinearModel& model, const Lab2000hlTable& table,
                           std::vector<std::string>& warnings, std::string label,
-                          ProgressSteps& progress) {
+                          ProgressSteps& progress, std::function<void()> inputs_done) {
   detail::DirectionParams params;
   params.max_dim = max_dim(iterated, o.bbox, iterated_name, warnings);
   params.radius_rel = o.radius_rel;
@@ -137,8 +137,10 @@ DirectionResult direction(const ColoredCloud& iterated, const ColoredCloud& othe
   params.threads = o.threads;
   params.progress = &progress;
   params.label = std::move(label);
+  params.inputs_done = std::move(inputs_done);
+  const std::size_t points = iterated.size();  // the clouds may be freed by inputs_done
   const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
-  warn_of_underdetermined_fits(out, iterated.size(), iterated_name, o, warnings);
+  warn_of_underdetermined_fits(out, points, iterated_name, o, warnings);
 
   DirectionResult d;
   d.features = out.pooled;
@@ -169,13 +171,15 @@ MetricResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& dis
 
   ProgressSteps progress(options.progress, (both ? 2 : 1) * detail::kProgressSteps);
   MetricResult result;
+  // The clouds may be freed once the last direction holds its own copies of them.
   if (dir != Direction::kDistToRef) {
     result.ref_to_dist = direction(reference, distorted, "reference", options, model, *table,
-                                   result.warnings, "ref→dist", progress);
+                                   result.warnings, "ref→dist", progress,
+                                   both ? nullptr : options.inputs_done);
   }
   if (dir != Direction::kRefToDist) {
     result.dist_to_ref = direction(distorted, reference, "distorted", options, model, *table,
-                                   result.warnings, "dist→ref", progress);
+                                   result.warnings, "dist→ref", progress, options.inputs_done);
   }
   combine_directions(result);
   progress.finish();

@@ -7,6 +7,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -81,14 +82,54 @@ struct PointData {
   std::vector<std::uint32_t> count_radius_other, count_radius_iterated;  // diagnostics only
 };
 
-/// The two clouds with their trees; indices are tree indices. When both clouds have the same
+/// A cloud's colours in its k-d tree's order, so that stage 1 reads them where it reads the
+/// points. Stored as 8-bit channels when every channel is some k / 255.0 (what the readers make
+/// of 8-bit files: 3 instead of 24 bytes per point), else as given; operator[] gives back the
+/// very doubles of the input either way.
+class TreeColours {
+ public:
+  TreeColours(const std::vector<Rgb>& colors, const KdTree& tree) {
+    const std::vector<std::uint32_t>& order = tree.input_index();
+    bytes_.resize(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (!to_bytes(colors[order[i]], bytes_[i])) {
+        LargeArray<std::array<std::uint8_t, 3>>().swap(bytes_);
+        exact_.resize(order.size());
+        for (std::size_t j = 0; j < order.size(); ++j) exact_[j] = colors[order[j]];
+        return;
+      }
+    }
+  }
+  Rgb operator[](std::size_t i) const {
+    if (!exact_.empty()) return exact_[i];
+    const auto& b = bytes_[i];
+    return Rgb{b[0] / 255.0, b[1] / 255.0, b[2] / 255.0};
+  }
+
+ private:
+  static bool to_bytes(const Rgb& c, std::array<std::uint8_t, 3>& out) {
+    const double channels[3] = {c.r, c.g, c.b};
+    for (int k = 0; k < 3; ++k) {
+      if (!(channels[k] >= 0.0 && channels[k] <= 1.0)) return false;
+      const int v = static_cast<int>(channels[k] * 255.0 + 0.5);
+      if (v / 255.0 != channels[k]) return false;
+      out[k] = static_cast<std::uint8_t>(v);
+    }
+    return true;
+  }
+  LargeArray<std::array<std::uint8_t, 3>> bytes_;
+  LargeArray<Rgb> exact_;
+};
+
+/// The two clouds' trees and colours; indices are tree indices. When both clouds have the same
 /// positions in the same order (a colour-only distortion) they share one tree.
 struct Clouds {
-  const ColoredCloud& iterated;
-  const ColoredCloud& other;
   const KdTree& iterated_tree;
   const KdTree& other_tree;
   bool same_positions;
+  /// Stage 1 only (freed before stage 2).
+  const TreeColours* iterated_colours = nullptr;
+  const TreeColours* other_colours = nullptr;
 };
 
 struct Stage1Scratch {
@@ -139,8 +180,8 @@ void curvatures(std::size_t i, const Clouds& c, const DirectionParams& params,
 /// LAB2000HL of p's colour and of nn_D(p)'s colour, chroma, and the hue difference.
 void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab2000hlTable& table,
              PointData& out) {
-  const Lab own = table.from_srgb(c.iterated.colors[c.iterated_tree.input_index()[i]]);
-  const Lab matched = table.from_srgb(c.other.colors[c.other_tree.input_index()[nearest]]);
+  const Lab own = table.from_srgb((*c.iterated_colours)[i]);
+  const Lab matched = table.from_srgb((*c.other_colours)[nearest]);
   out.lightness_iterated[i] = own.L;
   out.lightness_other[i] = matched.L;
   out.chroma_iterated[i] = chroma(own);
@@ -232,9 +273,6 @@ void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, cons
   const Vec3& p = c.iterated_tree.points()[i];
   const std::uint32_t nearest =
       match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
-  // The matched colour is read after the curvature fits: its cache miss (colours are in input
-  // order, points in tree order) resolves meanwhile.
-  __builtin_prefetch(&c.other.colors[c.other_tree.input_index()[nearest]]);
   out.correspondence_is_point[i] = out.correspondence[i] == p;
   const std::vector<Neighbour>& within_iterated =
       c.same_positions ? s.within_other : s.within_iterated;
@@ -257,9 +295,6 @@ void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
   s.near_other.gather(c.other_tree, box, radii.curvature2);
   s.have_reach = false;
   if (!c.same_positions) s.near_iterated.gather(c.iterated_tree, box, radii.curvature2);
-  for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
-    __builtin_prefetch(&c.iterated.colors[c.iterated_tree.input_index()[i]]);
-  }
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     stage1_point(batch, i, c, params, radii, table, s, out);
   }
@@ -490,10 +525,19 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
   DirectionParams p = params;
   p.knn = std::min(params.knn, other_tree.size());
   const Radii radii = radii_of(p);
-  const Clouds clouds{iterated, other, iterated_tree, other_tree, same_positions};
+  Clouds clouds{iterated_tree, other_tree, same_positions};
 
   stage("curvatures and correspondences");
-  PointData data = stage1(clouds, p, radii, table);
+  PointData data = [&] {
+    const TreeColours iterated_colours(iterated.colors, iterated_tree);
+    const TreeColours other_colours(other.colors, other_tree);
+    if (params.inputs_done) params.inputs_done();  // `iterated` and `other` are not read below
+    clouds.iterated_colours = &iterated_colours;
+    clouds.other_colours = &other_colours;
+    PointData d = stage1(clouds, p, radii, table);
+    clouds.iterated_colours = clouds.other_colours = nullptr;
+    return d;
+  }();
   DirectionOutput out;
   std::vector<std::uint32_t> counts;
   if (p.diagnostics) counts.resize(iterated_tree.size());

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,9 @@ struct DirectionParams {
   /// Optional: told each of the direction's kProgressSteps stages, prefixed with `label`.
   ProgressSteps* progress = nullptr;
   std::string label;
+  /// Optional: called once the direction holds its own copies of the two clouds (search trees,
+  /// colours); the clouds are not read afterwards.
+  std::function<void()> inputs_done;
 };
 
 /// Stages compute_direction reports: search trees, curvatures and correspondences, features.
@@ -80,7 +84,8 @@ double reference_max_dim(const std::vector<Vec3>& positions);
 
 /// One direction of PCQM: iterates `iterated`'s points (the reference's R in the reference
 /// tool's direction), finds their correspondences on `other` (its D).
-/// Both clouds must be non-empty with one colour per point (compute_pcqm checks this).
+/// Both clouds must be non-empty with one colour per point (compute_pcqm checks this); they are
+/// not read after params.inputs_done is called.
 /// Deterministic: bit-identical for any thread count.
 DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredCloud& other,
                                   const DirectionParams& params, const Lab2000hlTable& table);

@@ -38,7 +38,10 @@ MetricSpec pcqm_sampled_spec(SurfaceSampler sample) {
                                [&] { return sample(ref, sampling); });
     const ColoredCloud d = sample(dist, sampling);
     const ColoredCloud r = ref_task.get();
-    MetricResult result = compute_pcqm(r, d, detail::pcqm_options(run, values));
+    notify_inputs_done(run);  // the meshes are not read below
+    PcqmOptions options = detail::pcqm_options(run, values);
+    options.inputs_done = nullptr;  // the samples are this function's own
+    MetricResult result = compute_pcqm(r, d, options);
     result.metric = "pcqm_sampled";
     result.provenance.options["sampling"] = {
         {"points", sampling.points}, {"density", sampling.density}, {"seed", sampling.seed}};

@@ -181,6 +181,29 @@ TEST(Input, InMemoryMeshesAreAlsoClouds) {
             std::string::npos);
 }
 
+TEST(Input, ReleaseFreesWhatWasReadFromTheFileAndKeepsDataInMemory) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("qm3d_release_" + std::to_string(::getpid()) + ".ply");
+  std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                         "property float y\nproperty float z\nend_header\n0 0 0\n";
+  Registry reg;
+  int reads = 0;
+  reg.readers().cloud = [&](const std::filesystem::path&, FileFormat) {
+    ++reads;
+    return cloud_of({double(reads)});
+  };
+  const Input in = Input::from_file(path, reg);
+  EXPECT_EQ(in.cloud().positions[0][0], 1.0);
+  EXPECT_EQ(in.cloud().positions[0][0], 1.0);  // kept
+  in.release();
+  EXPECT_EQ(reads, 1);
+  EXPECT_EQ(in.cloud().positions[0][0], 2.0);  // read again
+  const Input memory = Input::from_cloud(cloud_of({5}), "pts");
+  memory.release();
+  EXPECT_EQ(memory.cloud().positions[0][0], 5.0);
+  std::filesystem::remove(path);
+}
+
 TEST(RunMetric, ChecksOptionsFillsProvenanceAndNamesTheInputsInErrors) {
   const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
   const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");

@@ -215,6 +215,32 @@ TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
   expect_sound_progress(calls, "dist→ref: closest points");
 }
 
+// The caller may free both meshes once inputs_done is called: the metric reads them no more
+// (they are emptied here; reading them afterwards would change the result or fail under the
+// sanitizers).
+TEST(Cmdm, InputsDoneComesOnceAndTheMeshesAreNotReadAfterIt) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_bothnoise.off").mesh;
+  for (int threads : {1, 2}) {
+    CmdmOptions o;
+    o.threads = threads;
+    const MetricResult expected = compute_cmdm(r, d, o);
+    ColoredMesh a = r, b = d;
+    int calls = 0;
+    o.inputs_done = [&] {
+      ++calls;
+      a = ColoredMesh{};
+      b = ColoredMesh{};
+    };
+    const MetricResult got = compute_cmdm(a, b, o);
+    EXPECT_EQ(calls, 1) << threads;
+    EXPECT_EQ(got.score, expected.score) << threads;
+    EXPECT_EQ(got.dist_to_ref->per_element, expected.dist_to_ref->per_element) << threads;
+    EXPECT_EQ(got.ref_to_dist->per_element, expected.ref_to_dist->per_element) << threads;
+    EXPECT_EQ(got.warnings, expected.warnings) << threads;
+  }
+}
+
 TEST(Cmdm, ScoreGrowsWithColourNoise) {
   const double col = result_for("blob4_ref.off", "blob4_colnoise.off").score;
   const double both = result_for("blob4_ref.off", "blob4_bothnoise.off").score;

@@ -457,6 +457,63 @@ TEST(Pcqm, SymmetricIsTheMeanOfBothDirections) {
   EXPECT_NE(forward.score, backward.score);
 }
 
+// The caller may free both clouds once inputs_done is called: the metric reads them no more
+// (they are emptied here; reading them afterwards would change the result or fail under the
+// sanitizers). In the symmetric run it comes with the second direction.
+TEST(Pcqm, InputsDoneComesOnceAndTheCloudsAreNotReadAfterIt) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 3000);
+  const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 3000);
+  for (Direction d : {Direction::kRefToDist, Direction::kDistToRef, Direction::kSymmetric}) {
+    PcqmOptions o = test_options();
+    o.direction = d;
+    const MetricResult expected = compute_pcqm(ref, dist, o);
+    ColoredCloud a = ref, b = dist;
+    int calls = 0;
+    o.inputs_done = [&] {
+      ++calls;
+      a = ColoredCloud{};
+      b = ColoredCloud{};
+    };
+    const MetricResult got = compute_pcqm(a, b, o);
+    const std::string name = direction_name(d);
+    EXPECT_EQ(calls, 1) << name;
+    EXPECT_EQ(got.score, expected.score) << name;
+    EXPECT_EQ(got.warnings, expected.warnings) << name;
+    EXPECT_EQ(got.any_direction(false).per_element, expected.any_direction(false).per_element)
+        << name;
+  }
+}
+
+// Stage 1 reads the colours from its own copy in tree order (8-bit when every channel is some
+// k / 255.0): each point's LAB2000HL, and its match's, are those of the input's very colours,
+// whether they came from an 8-bit file or not.
+TEST(Pcqm, ColoursReachStageOneUnchangedWhetherEightBitOrNot) {
+  const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 3000);
+  const auto table = Lab2000hlTable::shared(test::tables_dir());
+  for (bool eight_bit : {true, false}) {
+    ColoredCloud a = ref, b = ref;  // same positions: each point's match is its copy
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      Rgb& c = b.colors[i];
+      c = eight_bit ? Rgb{double((i * 37) % 256) / 255.0, c.g, c.b}
+                    : Rgb{0.3 * c.r + 0.1234567, c.g, c.b};
+    }
+    if (!eight_bit) a.colors[7].g = 0.5 + 1e-9;  // one channel off the 8-bit grid is enough
+    detail::DirectionParams params;
+    params.max_dim = detail::reference_max_dim(a.positions);
+    params.diagnostics = true;
+    const detail::DirectionOutput out = detail::compute_direction(a, b, params, *table);
+    std::size_t mismatches = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const Lab own = table->from_srgb(a.colors[i]), matched = table->from_srgb(b.colors[i]);
+      const Lab& o = out.diagnostics.lab_iterated[i];
+      const Lab& m = out.diagnostics.lab_other[i];
+      mismatches += o.L != own.L || o.a != own.a || o.b != own.b || m.L != matched.L ||
+                    m.a != matched.a || m.b != matched.b;
+    }
+    EXPECT_EQ(mismatches, 0u) << (eight_bit ? "8-bit" : "other");
+  }
+}
+
 TEST(Pcqm, KnnLargerThanTheCloudUsesEveryPoint) {
   const ColoredCloud ref = head(cloud("sphere_50k_ref.ply"), 8);
   const ColoredCloud dist = head(cloud("sphere_50k_gnoise0.005.ply"), 8);

@@ -84,6 +84,10 @@ class Input {
   const ColoredCloud& cloud() const;
   /// Reads now what `kind` needs (so that two inputs can be read concurrently).
   void load(Kind as) const;
+  /// Frees what was read from the file (it is read again if used later); data given in memory
+  /// is kept. References from mesh() / cloud() are invalid afterwards: call it only when no one
+  /// uses them (e.g. from RunOptions::inputs_done).
+  void release() const;
 
  private:
   struct State;

@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -54,7 +55,17 @@ struct RunOptions {
   std::filesystem::path data_dir;
   /// Feature weights replacing the metric's published model (metrics with a linear model only).
   std::optional<LinearModel> model;
+  /// Optional: called once, as soon as the metric holds its own copies of what it needs of the
+  /// two input objects; the metric does not touch them afterwards, so the caller may free them
+  /// (the tool frees what it read from files: lower peak memory). Not called when the
+  /// computation fails before that point.
+  std::function<void()> inputs_done;
 };
+
+/// Calls run.inputs_done if it is set (the metrics' way to say they are done with their inputs).
+inline void notify_inputs_done(const RunOptions& run) {
+  if (run.inputs_done) run.inputs_done();
+}
 
 /// One direction of a metric.
 struct DirectionResult {
