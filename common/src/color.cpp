@@ -146,7 +146,11 @@ Lab srgb_to_cielab(const Rgb& rgb) {
 double chroma(const Lab& c) { return std::sqrt(c.a * c.a + c.b * c.b); }
 
 double hue_difference(const Lab& c1, const Lab& c2) {
-  const double dc = chroma(c1) - chroma(c2);
+  return hue_difference(c1, c2, chroma(c1), chroma(c2));
+}
+
+double hue_difference(const Lab& c1, const Lab& c2, double chroma1, double chroma2) {
+  const double dc = chroma1 - chroma2;
   const double dh2 = std::pow(c1.a - c2.a, 2) + std::pow(c1.b - c2.b, 2) - std::pow(dc, 2);
   return dh2 < 0 ? 0.0 : std::sqrt(dh2);
 }

@@ -39,8 +39,8 @@ Sample vertex_sample(const MatchedFields& f, std::uint32_t v) {
 // The point where edge (v -> w) leaves the sphere: position v + clipped, attributes blended with
 // t = |clipped| / |edge| (computed as MEPP2 does, from the two lengths).
 Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
-                       const Vec3& clipped, double len_old) {
-  const double t = norm(clipped) / len_old;
+                       const Vec3& clipped, const Vec3& edge) {
+  const double t = norm(clipped) / norm(edge);
   const auto& q = *f.matched_point;
   Sample s;
   s.point1 = add(f.mesh->positions[v], clipped);
@@ -63,9 +63,10 @@ void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, doub
   if (!with_color) return;
   out.light1.push_back(s.color1.L);
   out.light2.push_back(s.color2.L);
-  out.chroma1.push_back(chroma(s.color1));
-  out.chroma2.push_back(chroma(s.color2));
-  out.hue_diff.push_back(hue_difference(s.color1, s.color2));
+  const double chroma1 = chroma(s.color1), chroma2 = chroma(s.color2);
+  out.chroma1.push_back(chroma1);
+  out.chroma2.push_back(chroma2);
+  out.hue_diff.push_back(hue_difference(s.color1, s.color2, chroma1, chroma2));
 }
 
 }  // namespace
@@ -95,12 +96,14 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
   out.clear();
   push_sample(vertex_sample(f, v0), o, q0, walk.sigma, with_color, out);
   walk_outward(m, v0, walk.strict_outward_test, scratch,
-               [&](std::uint32_t v, std::uint32_t, std::uint32_t w, Vec3 vec) {
-                 const double len_old = norm(vec);
+               [&](std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
+                 Vec3 vec = edge;
                  const bool isect = sphere_clip_vector_cmdm(o, walk.radius, m.positions[v], vec);
                  if (!isect && !scratch.enter(w)) return;  // inside and already sampled
-                 const Sample s = (len_old != 0 && isect) ? crossing_sample(f, v, w, vec, len_old)
-                                                          : vertex_sample(f, w);
+                 // |edge| only for crossings (a zero-length edge gives the vertex sample).
+                 const Sample s = (isect && dot(edge, edge) != 0)
+                                      ? crossing_sample(f, v, w, vec, edge)
+                                      : vertex_sample(f, w);
                  push_sample(s, o, q0, walk.sigma, with_color, out);
                });
 }

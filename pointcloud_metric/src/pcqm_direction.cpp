@@ -184,9 +184,10 @@ void colours(std::size_t i, std::uint32_t nearest, const Clouds& c, const Lab200
   const Lab matched = table.from_srgb((*c.other_colours)[nearest]);
   out.lightness_iterated[i] = own.L;
   out.lightness_other[i] = matched.L;
-  out.chroma_iterated[i] = chroma(own);
-  out.chroma_other[i] = chroma(matched);
-  out.hue_difference[i] = hue_difference(own, matched);
+  const double own_chroma = chroma(own), matched_chroma = chroma(matched);
+  out.chroma_iterated[i] = own_chroma;
+  out.chroma_other[i] = matched_chroma;
+  out.hue_difference[i] = hue_difference(own, matched, own_chroma, matched_chroma);
   if (!out.lab_iterated.empty()) {
     out.lab_iterated[i] = own;
     out.lab_other[i] = matched;

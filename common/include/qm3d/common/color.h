@@ -34,6 +34,8 @@ double chroma(const Lab& c);
 /// Hue difference sqrt(max(0, da^2 + db^2 - dC^2)) between two colours (CMDM paper eq. 1.8,
 /// MEPP2 `compute_color_statistics`, PCQM `delta_HUE`).
 double hue_difference(const Lab& c1, const Lab& c2);
+/// The same with the two colours' chroma(c1), chroma(c2) already computed.
+double hue_difference(const Lab& c1, const Lab& c2, double chroma1, double chroma2);
 
 /// The LAB2000HL lookup tables: a 1-D table for lightness and two 257x257 tables for (a, b).
 ///
