@@ -6,8 +6,9 @@
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
 #   big      PCQM on a 4M-point sphere pair (memory)
-#   threads  CMDM blob7 and PCQM 200k with --threads 1 and with 2 threads: --threads 1 keeps one
-#            core busy (CPU <= 1.05 x wall) and is at least 0.55 x as fast as 2 threads
+#   threads  CMDM blob7 and PCQM 200k with --threads 1 and with 2 threads (runs alternating):
+#            --threads 1 keeps one core busy (CPU <= 1.05 x wall) and is at least 0.55 x as fast
+#            as 2 threads
 #   batch    `batch --jobs 2` over 20 copies of the blob6 pair and 20 of the 200k-point pair: wall
 #            <= 1.1 x (sum of the single pairs' --threads 1 CPU times) / 2
 #
@@ -62,31 +63,32 @@ EOF
 }
 median() { $PY -c "import statistics,sys; print(statistics.median(float(l.split()[int(sys.argv[2])]) for l in open(sys.argv[1]) if l.strip()))" "$1" "$2"; }
 
-# measure FILE cmd... : runs cmd RUNS times, appending "wall cpu rss_kb" lines to FILE; the
-# command's stdout of the last run is left in $TMP/out
+# measure_once FILE cmd... : runs cmd once, appending "wall cpu rss_kb" to FILE (and the score
+# to $SCORES when set); the command's stdout is left in $TMP/out
+measure_once() {
+  local file=$1; shift
+  /usr/bin/time -f "%e %U %S %M" -o "$TMP/time" "$@" > "$TMP/out" 2> "$TMP/err" || {
+    cat "$TMP/err" >&2; echo "FAIL: $*" >&2; STATUS=1; }
+  awk '{printf "%s %.2f %s\n", $1, $2 + $3, $4}' "$TMP/time" >> "$file"
+  [ "${SCORES:-}" = "" ] || awk -F, 'NR==2 {print $4}' "$TMP/out" >> "$SCORES"
+}
+
+# measure FILE cmd... : runs cmd RUNS times into a fresh FILE
 measure() {
   local file=$1; shift
   : > "$file"
-  for _ in $(seq "$RUNS"); do
-    /usr/bin/time -f "%e %U %S %M" -o "$TMP/time" "$@" > "$TMP/out" 2> "$TMP/err" || {
-      cat "$TMP/err" >&2; echo "FAIL: $*" >&2; STATUS=1; }
-    awk '{printf "%s %.2f %s\n", $1, $2 + $3, $4}' "$TMP/time" >> "$file"
-    [ "${SCORES:-}" = "" ] || awk -F, 'NR==2 {print $4}' "$TMP/out" >> "$SCORES"
-  done
+  for _ in $(seq "$RUNS"); do measure_once "$file" "$@"; done
 }
 
-# run_case label target metric ref dist threads -> one table row; LAST_WALL / LAST_CPU: medians
-run_case() {
-  local label=$1 target=$2 metric=$3 ref=$4 dist=$5 threads=$6
-  local file="$TMP/case" scores
-  SCORES="$TMP/scores"; : > "$SCORES"
-  measure "$file" "$QM3D" --threads "$threads" --quiet "$metric" "$DATA/$ref" "$DATA/$dist" --csv
-  SCORES=""
+# report_case label target metric ref dist threads times scores -> one table row from the runs
+# in `times` (and their scores); LAST_WALL / LAST_CPU: medians
+report_case() {
+  local label=$1 target=$2 metric=$3 ref=$4 dist=$5 threads=$6 file=$7 scores=$8
   local distinct score expected rel="n/a"
-  distinct=$(sort -u "$TMP/scores" | wc -l)
-  score=$(head -1 "$TMP/scores")
+  distinct=$(sort -u "$scores" | wc -l)
+  score=$(head -1 "$scores")
   if [ "$distinct" != 1 ]; then
-    echo "FAIL: $label: the score differs between runs: $(sort -u "$TMP/scores" | tr '\n' ' ')" >&2
+    echo "FAIL: $label: the score differs between runs: $(sort -u "$scores" | tr '\n' ' ')" >&2
     STATUS=1
   fi
   expected=$(ref_score "$metric" "$ref" "$dist")
@@ -100,6 +102,15 @@ run_case() {
     "$(stats "$file" 0)" "$(stats "$file" 1)" "$(stats "$file" 2 1024)" "$score" "${expected:-n/a}" \
     "$rel" "$target"
   LAST_WALL=$(median "$file" 0) LAST_CPU=$(median "$file" 1)
+}
+
+# run_case label target metric ref dist threads -> RUNS runs and their table row
+run_case() {
+  local label=$1 target=$2 metric=$3 ref=$4 dist=$5 threads=$6
+  SCORES="$TMP/scores"; : > "$SCORES"
+  measure "$TMP/case" "$QM3D" --threads "$threads" --quiet "$metric" "$DATA/$ref" "$DATA/$dist" --csv
+  SCORES=""
+  report_case "$label" "$target" "$metric" "$ref" "$dist" "$threads" "$TMP/case" "$TMP/scores"
 }
 
 check() {  # condition message: reports and records a failed check
@@ -139,9 +150,17 @@ if [ "$WHICH" = all ] || [ "$WHICH" = threads ]; then
   for c in "cmdm|CMDM blob7 (164k vertices)|blob7_ref.off|blob7_bothnoise.off" \
            "pcqm|PCQM sphere 200k points|sphere_200k_ref_bin.ply|sphere_200k_cnoise10_bin.ply"; do
     IFS='|' read -r metric label ref dist <<<"$c"
-    run_case "$label" "CPU <= 1.05 x wall" "$metric" "$ref" "$dist" 1
+    # 1 and 2 threads alternate, so that a slow spell of the machine weighs on both alike.
+    for f in t1 t2 s1 s2; do : > "$TMP/$f"; done
+    for _ in $(seq "$RUNS"); do
+      for t in 1 2; do
+        SCORES="$TMP/s$t" measure_once "$TMP/t$t" "$QM3D" --threads "$t" --quiet "$metric" \
+          "$DATA/$ref" "$DATA/$dist" --csv
+      done
+    done
+    report_case "$label" "CPU <= 1.05 x wall" "$metric" "$ref" "$dist" 1 "$TMP/t1" "$TMP/s1"
     w1=$LAST_WALL c1=$LAST_CPU
-    run_case "$label" ">= 0.55 x as fast with 1 thread" "$metric" "$ref" "$dist" 2
+    report_case "$label" ">= 0.55 x as fast with 1 thread" "$metric" "$ref" "$dist" 2 "$TMP/t2" "$TMP/s2"
     w2=$LAST_WALL
     checks+=("$c1 <= 1.05 * $w1|$label, --threads 1: CPU $c1 s in $w1 s (CPU/wall $($PY -c "print('%.2f' % ($c1/$w1))"), target <= 1.05)")
     checks+=("$w2 / $w1 >= 0.55|$label: 1 thread $w1 s, 2 threads $w2 s: 1 thread is $($PY -c "print('%.2f' % ($w2/$w1))") x as fast (target >= 0.55)")
