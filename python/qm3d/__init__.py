@@ -240,7 +240,7 @@ def _option_value(spec, option, value):
     return value
 
 
-def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None):
+def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, release=False):
     spec = _SPECS[name]
     known = {o["name"]: o for o in spec["options"]}
     options = {}
@@ -271,6 +271,8 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None):
         else:
             model_path = _os.fsdecode(model)
     weights = None if run["weights"] is None else [float(w) for w in run["weights"]]
+    # Inputs made for this call alone are freed as soon as the metric holds its own copies.
+    release = release or (ref_inputs is None and dist_inputs is None)
     ref_inputs = ref_inputs or _Inputs(reference, "reference")
     dist_inputs = dist_inputs or _Inputs(distorted, "distorted")
     result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
@@ -278,7 +280,7 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None):
                        bool(run["per_element"]),
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
                        else (_DEFAULT_TABLES or ""),
-                       weights, model_path, run["progress"])
+                       weights, model_path, run["progress"], release)
     return Result(result)
 
 
@@ -363,8 +365,10 @@ def compare(reference, distorted, **options):
     _check_option_names("compare", options)
     ref_inputs, dist_inputs = _Inputs(reference, "reference"), _Inputs(distorted, "distorted")
     out = {}
-    for name in _qm3d.applicable(ref_inputs.any(), dist_inputs.any()):
-        out[name] = _run(name, None, None, _options_for(name, options), ref_inputs, dist_inputs)
+    names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
+    for i, name in enumerate(names):
+        out[name] = _run(name, None, None, _options_for(name, options), ref_inputs, dist_inputs,
+                         release=i == len(names) - 1)
     return out
 
 

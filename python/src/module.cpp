@@ -198,6 +198,9 @@ struct RunArguments {
   std::optional<std::vector<double>> weights;
   std::optional<std::string> model_path;
   py::object progress;
+  /// The caller is done with both inputs: what was read from their files is freed as soon as the
+  /// metric holds its own copies.
+  bool release_inputs = false;
 };
 
 MetricResult run(const std::string& metric, const Input& reference, const Input& distorted,
@@ -226,6 +229,12 @@ MetricResult run(const std::string& metric, const Input& reference, const Input&
     run.progress = [callback](const std::string& stage, double fraction) {
       py::gil_scoped_acquire gil;
       callback(stage, fraction);
+    };
+  }
+  if (a.release_inputs) {
+    run.inputs_done = [&reference, &distorted] {
+      reference.release();
+      distorted.release();
     };
   }
   const nlohmann::json options = nlohmann::json::parse(a.options_json);
@@ -317,15 +326,16 @@ PYBIND11_MODULE(_qm3d, m) {
       [](const std::string& metric, const Input& reference, const Input& distorted,
          const std::string& options_json, std::optional<std::string> direction, int threads,
          bool per_element, const std::string& data_dir, std::optional<std::vector<double>> weights,
-         std::optional<std::string> model_path, py::object progress) {
+         std::optional<std::string> model_path, py::object progress, bool release_inputs) {
         return run(metric, reference, distorted,
                    RunArguments{options_json, std::move(direction), threads, per_element,
                                 data_dir, std::move(weights), std::move(model_path),
-                                std::move(progress)});
+                                std::move(progress), release_inputs});
       },
       py::arg("metric"), py::arg("reference"), py::arg("distorted"), py::arg("options_json"),
       py::arg("direction"), py::arg("threads"), py::arg("per_element"), py::arg("data_dir"),
-      py::arg("weights"), py::arg("model_path"), py::arg("progress"));
+      py::arg("weights"), py::arg("model_path"), py::arg("progress"),
+      py::arg("release_inputs") = false);
 
   m.def(
       "sample",

@@ -74,6 +74,12 @@ def test_compare_runs_every_metric_that_applies():
     meshes = qm3d.compare(str(REF / "cmdm" / "blob4_ref.off"), str(REF / "cmdm" / "blob4_colnoise.off"),
                           points=2000)
     assert list(meshes) == ["cmdm", "msdm2", "pcqm", "pcqm_sampled"]
+    # The files are read once for all four and freed by the last: each score is the metric's own.
+    for name, result in meshes.items():
+        alone = qm3d.metric(name, str(REF / "cmdm" / "blob4_ref.off"),
+                            str(REF / "cmdm" / "blob4_colnoise.off"),
+                            **({"points": 2000} if name == "pcqm_sampled" else {}))
+        assert result.score == alone.score, name
     clouds = qm3d.compare(CLOUD_REF, CLOUD_DIST)
     assert list(clouds) == ["pcqm"]
     assert clouds["pcqm"].score == qm3d.pcqm(CLOUD_REF, CLOUD_DIST).score
