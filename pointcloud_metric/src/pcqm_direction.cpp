@@ -85,7 +85,8 @@ struct PointData {
 /// A cloud's colours in its k-d tree's order, so that stage 1 reads them where it reads the
 /// points. Stored as 8-bit channels when every channel is some k / 255.0 (what the readers make
 /// of 8-bit files: 3 instead of 24 bytes per point), else as given; operator[] gives back the
-/// very doubles of the input either way.
+/// very doubles of the input either way (a -0.0 channel as +0.0, which srgb_to_linear maps
+/// alike).
 class TreeColours {
  public:
   TreeColours(const std::vector<Rgb>& colors, const KdTree& tree) {

@@ -38,7 +38,7 @@ MetricSpec pcqm_sampled_spec(SurfaceSampler sample) {
                                [&] { return sample(ref, sampling); });
     const ColoredCloud d = sample(dist, sampling);
     const ColoredCloud r = ref_task.get();
-    notify_inputs_done(run);  // the meshes are not read below
+    if (run.inputs_done) run.inputs_done();  // the meshes are not read below
     PcqmOptions options = detail::pcqm_options(run, values);
     options.inputs_done = nullptr;  // the samples are this function's own
     MetricResult result = compute_pcqm(r, d, options);

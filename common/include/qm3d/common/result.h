@@ -62,10 +62,6 @@ struct RunOptions {
   std::function<void()> inputs_done;
 };
 
-/// Calls run.inputs_done if it is set (the metrics' way to say they are done with their inputs).
-inline void notify_inputs_done(const RunOptions& run) {
-  if (run.inputs_done) run.inputs_done();
-}
 
 /// One direction of a metric.
 struct DirectionResult {
