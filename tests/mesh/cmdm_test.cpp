@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "disposable_inputs.h"
 #include "qm3d/common/error.h"
 #include "progress_recorder.h"
 #include "qm3d/mesh/mesh_io.h"
@@ -225,15 +226,10 @@ TEST(Cmdm, InputsDoneComesOnceAndTheMeshesAreNotReadAfterIt) {
     CmdmOptions o;
     o.threads = threads;
     const MetricResult expected = compute_cmdm(r, d, o);
-    ColoredMesh a = r, b = d;
-    int calls = 0;
-    o.inputs_done = [&] {
-      ++calls;
-      a = ColoredMesh{};
-      b = ColoredMesh{};
-    };
-    const MetricResult got = compute_cmdm(a, b, o);
-    EXPECT_EQ(calls, 1) << threads;
+    test::DisposableInputs<ColoredMesh> inputs{r, d};
+    o.inputs_done = inputs.callback();
+    const MetricResult got = compute_cmdm(inputs.reference, inputs.distorted, o);
+    EXPECT_EQ(inputs.calls, 1) << threads;
     EXPECT_EQ(got.score, expected.score) << threads;
     EXPECT_EQ(got.dist_to_ref->per_element, expected.dist_to_ref->per_element) << threads;
     EXPECT_EQ(got.ref_to_dist->per_element, expected.ref_to_dist->per_element) << threads;

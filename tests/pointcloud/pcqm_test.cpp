@@ -10,6 +10,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "disposable_inputs.h"
 #include "kd_tree.h"
 #include "pcqm_internal.h"
 #include "qm3d/common/error.h"
@@ -467,16 +468,11 @@ TEST(Pcqm, InputsDoneComesOnceAndTheCloudsAreNotReadAfterIt) {
     PcqmOptions o = test_options();
     o.direction = d;
     const MetricResult expected = compute_pcqm(ref, dist, o);
-    ColoredCloud a = ref, b = dist;
-    int calls = 0;
-    o.inputs_done = [&] {
-      ++calls;
-      a = ColoredCloud{};
-      b = ColoredCloud{};
-    };
-    const MetricResult got = compute_pcqm(a, b, o);
+    test::DisposableInputs<ColoredCloud> inputs{ref, dist};
+    o.inputs_done = inputs.callback();
+    const MetricResult got = compute_pcqm(inputs.reference, inputs.distorted, o);
     const std::string name = direction_name(d);
-    EXPECT_EQ(calls, 1) << name;
+    EXPECT_EQ(inputs.calls, 1) << name;
     EXPECT_EQ(got.score, expected.score) << name;
     EXPECT_EQ(got.warnings, expected.warnings) << name;
     EXPECT_EQ(got.any_direction(false).per_element, expected.any_direction(false).per_element)

@@ -62,7 +62,6 @@ struct RunOptions {
   std::function<void()> inputs_done;
 };
 
-
 /// One direction of a metric.
 struct DirectionResult {
   double score = 0;          ///< the direction's pooled score
