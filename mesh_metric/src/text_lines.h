@@ -8,6 +8,12 @@
 
 namespace qm3d::mesh::detail {
 
+/// The whitespace of the text formats: blank, tab, carriage return, form feed, vertical tab
+/// (tested inline: string_view's find_first_of calls memchr on the set for every character).
+inline bool is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
+
 /// Iterates over the lines of a buffer, stripping '#' comments and trailing '\r'.
 class LineReader {
  public:
@@ -21,7 +27,7 @@ class LineReader {
       pos_ = end + 1;
       ++line_no_;
       if (const auto hash = l.find('#'); hash != std::string_view::npos) l = l.substr(0, hash);
-      if (l.find_first_not_of(" \t\r\f\v") == std::string_view::npos) continue;
+      if (blank(l)) continue;
       line = l;
       return true;
     }
@@ -32,6 +38,13 @@ class LineReader {
   std::size_t remaining_bytes() const { return pos_ < text_.size() ? text_.size() - pos_ : 0; }
 
  private:
+  static bool blank(std::string_view l) {
+    for (const char c : l) {
+      if (!is_blank(c)) return false;
+    }
+    return true;
+  }
+
   std::string_view text_;
   std::size_t pos_ = 0;
   std::size_t line_no_ = 0;
@@ -44,10 +57,11 @@ class Tokens {
   explicit Tokens(std::string_view line) : line_(line) {}
 
   bool next(std::string_view& token) {
-    const auto begin = line_.find_first_not_of(" \t\r\f\v", pos_);
-    if (begin == std::string_view::npos) return false;
-    auto end = line_.find_first_of(" \t\r\f\v", begin);
-    if (end == std::string_view::npos) end = line_.size();
+    std::size_t begin = pos_;
+    while (begin < line_.size() && is_blank(line_[begin])) ++begin;
+    if (begin == line_.size()) return false;
+    std::size_t end = begin + 1;
+    while (end < line_.size() && !is_blank(line_[end])) ++end;
     token = line_.substr(begin, end - begin);
     pos_ = end;
     return true;
