@@ -9,6 +9,7 @@
 #include <map>
 
 #include "qm3d/common/error.h"
+#include "triangle_connectivity.h"
 #include "vec3_ops.h"
 
 namespace qm3d::mesh::detail {
@@ -18,18 +19,6 @@ using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
-
-// Tries to build the mesh face by face; false when some face cannot be added (non-manifold).
-bool add_faces_directly(const std::vector<Vec3>& positions, const ArrayView<Triangle>& tris,
-                        SurfaceMesh& sm) {
-  for (const Vec3& p : positions) sm.add_vertex(Point(p[0], p[1], p[2]));
-  for (const Triangle& t : tris) {
-    const auto f = sm.add_face(SurfaceMesh::Vertex_index(t[0]), SurfaceMesh::Vertex_index(t[1]),
-                               SurfaceMesh::Vertex_index(t[2]));
-    if (f == SurfaceMesh::null_face()) return false;
-  }
-  return true;
-}
 
 // Repairs a non-manifold soup by duplicating vertices (which become owned copies of the input's),
 // recording where each vertex came from.
@@ -155,17 +144,30 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
   valid_triangles(mesh, name, out);
   if (out.triangles.size() == 0) throw FormatError(name + ": no valid faces");
 
-  SurfaceMesh sm;
-  if (!add_faces_directly(mesh.positions, out.triangles, sm)) {
+  // Face by face as MEPP2's reader adds them (Euler::add_face), which fails on a non-manifold
+  // configuration; such a mesh is repaired into a CGAL Surface_mesh.
+  RingFaces rings;
+  {
+    TriangleConnectivity connectivity(mesh.positions.size(), out.triangles.size());
+    bool manifold = true;
+    for (const Triangle& t : out.triangles) {
+      if (!connectivity.add_face(t)) {
+        manifold = false;
+        break;
+      }
+    }
+    if (manifold) rings = connectivity.rings();
+  }
+  if (rings.offsets.empty()) {
+    SurfaceMesh sm;
     build_from_soup(mesh, {out.triangles.begin(), out.triangles.end()}, out, sm);
     out.positions = view_of(out.owned_positions);
     out.triangles = view_of(out.owned_triangles);
     out.warnings.push_back(name + ": non-manifold mesh repaired by duplicating " +
                            std::to_string(out.positions.size() - mesh.positions.size()) +
                            " vertices (and re-orienting faces where needed)");
+    rings = extract_rings(sm);
   }
-  RingFaces rings = extract_rings(sm);
-  sm.clear();
   // A triangle's vertices in the order MEPP2 sees them: its reader adds each face with
   // CGAL::Euler::add_face in the file's order, whose halfedge(f) points to the first vertex.
   std::vector<Vec3> normals(out.triangles.size());

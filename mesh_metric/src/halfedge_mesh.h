@@ -1,5 +1,7 @@
-// The connectivity the CMDM / MSDM2 walks need, extracted once from a CGAL Surface_mesh into flat
-// arrays (the Surface_mesh itself is released, which keeps memory low on large meshes). Internal.
+// The connectivity the CMDM / MSDM2 walks need, in flat arrays: built face by face as CGAL's
+// Surface_mesh builds it (triangle_connectivity.h), or taken from a CGAL Surface_mesh when a
+// non-manifold input has to be repaired (the Surface_mesh is released: memory stays low on large
+// meshes). Internal.
 #pragma once
 
 #include <cstdint>
