@@ -2,13 +2,15 @@
 
 #include <CGAL/AABB_primitive.h>
 #include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_tree/internal/AABB_search_tree.h>
 #include <CGAL/Simple_cartesian.h>
 #include <boost/iterator/counting_iterator.hpp>
 #include <boost/iterator/transform_iterator.hpp>
 
 #include <cmath>
+#include <memory>
 
+#include "closest_point.h"
 #include "vec3_ops.h"
 
 namespace qm3d::mesh::detail {
@@ -20,8 +22,9 @@ using Triangle3 = Kernel::Triangle_3;
 
 Point to_point(const Vec3& p) { return Point(p[0], p[1], p[2]); }
 
-// Property maps that build a face's triangle and reference point from our arrays on demand, so
-// the AABB tree stores only face indices (no copy of the mesh).
+// CGAL's AABB traits for face ids, as MEPP2's tree has them (the maps give a face's triangle and
+// its reference point, its first corner): the k-d tree of search hints is CGAL's own, whose
+// choice among equidistant hints decides ties too, and needs them.
 struct FaceTriangleMap {
   const HalfedgeMesh* mesh = nullptr;
   using key_type = std::uint32_t;
@@ -48,7 +51,9 @@ struct FacePointMap {
 
 using Primitive = CGAL::AABB_primitive<std::uint32_t, FaceTriangleMap, FacePointMap,
                                        CGAL::Tag_true /*external maps*/, CGAL::Tag_false>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+using Traits = CGAL::AABB_traits<Kernel, Primitive>;
+using HintTree = CGAL::AABB_search_tree<Traits>;
+using Hint = Traits::Point_and_primitive_id;
 
 double heron_area(double p, double a, double b, double c) {
   const double s = p * (p - a) * (p - b) * (p - c);
@@ -65,17 +70,23 @@ std::array<double, 3> heron_areas(const HalfedgeMesh& mesh, std::uint32_t face, 
   return {heron_area(p1, l1, t3, t2), heron_area(p2, l2, t3, t1), heron_area(p3, l3, t1, t2)};
 }
 
-// The closest-point search starts from a hint: the face of the nearest sample in a kd-tree. When
-// a query projects onto an edge or a vertex, the hint decides which of the equidistant faces is
-// reported. MSDM2 measures its Heron distances from the off-surface query, so that choice moves
-// its score (by 6e-5 on blob4_geonoise): it gets CGAL's default samples exactly as MEPP2's tree
-// takes them (one per face, its first corner, in face order, before build() reorders the
-// primitives). CMDM interpolates at the projected point, where the tied faces agree, and gets one
+// The closest-point search starts from a hint: a point on the mesh and its face, the nearest of
+// a set of samples in CGAL's k-d tree. When a query projects onto an edge or a vertex, the hint
+// decides which of the equidistant faces is reported. MSDM2 measures its Heron distances from
+// the off-surface query, so that choice moves its score (by 6e-5 on blob4_geonoise): it gets
+// CGAL's default samples exactly as MEPP2's tree takes them (one per face, its first corner, in
+// face order). CMDM interpolates at the projected point, where the tied faces agree, and gets one
 // sample per vertex instead: the same scores in half the memory (42 MB less on a 1.3M-face mesh).
-void add_search_hints(Tree& tree, const HalfedgeMesh& target, HeronAnchor anchor) {
+std::unique_ptr<HintTree> search_hints(const HalfedgeMesh& target, HeronAnchor anchor) {
   if (anchor == HeronAnchor::kQueryPoint) {
-    tree.accelerate_distance_queries();
-    return;
+    const auto to_hint = [&](std::uint32_t f) {
+      return Hint(to_point(target.positions[target.triangles[f][0]]), f);
+    };
+    const boost::counting_iterator<std::uint32_t> first(0);
+    const boost::counting_iterator<std::uint32_t> last(
+        static_cast<std::uint32_t>(target.triangles.size()));
+    return std::make_unique<HintTree>(boost::make_transform_iterator(first, to_hint),
+                                      boost::make_transform_iterator(last, to_hint));
   }
   std::vector<std::int64_t> vertex_face(target.positions.size(), -1);
   for (std::uint32_t f = 0; f < target.triangles.size(); ++f) {
@@ -89,40 +100,33 @@ void add_search_hints(Tree& tree, const HalfedgeMesh& target, HeronAnchor anchor
     if (vertex_face[v] >= 0) hinted.push_back(v);
   }
   const auto to_hint = [&](std::uint32_t v) {
-    return Tree::Point_and_primitive_id(to_point(target.positions[v]),
-                                        static_cast<std::uint32_t>(vertex_face[v]));
+    return Hint(to_point(target.positions[v]), static_cast<std::uint32_t>(vertex_face[v]));
   };
-  tree.accelerate_distance_queries(boost::make_transform_iterator(hinted.begin(), to_hint),
-                                   boost::make_transform_iterator(hinted.end(), to_hint));
+  return std::make_unique<HintTree>(boost::make_transform_iterator(hinted.begin(), to_hint),
+                                    boost::make_transform_iterator(hinted.end(), to_hint));
 }
 
 }  // namespace
 
 SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
                                 HeronAnchor anchor, int threads) {
-  const FaceTriangleMap triangles{&target};
-  const FacePointMap points{&target};
-  Tree tree(boost::counting_iterator<std::uint32_t>(0),
-            boost::counting_iterator<std::uint32_t>(
-                static_cast<std::uint32_t>(target.triangles.size())),
-            triangles, points);
-  add_search_hints(tree, target, anchor);
-  tree.build();  // both structures built now: the queries below share a read-only tree
+  const std::unique_ptr<HintTree> hints = search_hints(target, anchor);
+  const FaceBoxTree tree(target.positions, target.triangles, threads);
   SurfaceMatches out;
   out.points.resize(queries.size());
   out.matches.resize(queries.size());
-  auto match_one = [&](std::size_t i) {
-    const Vec3& v = queries[i];
-    const auto pp = tree.closest_point_and_primitive(to_point(v));
-    Vec3& point = out.points[i];
-    point = {pp.first.x(), pp.first.y(), pp.first.z()};
-    SurfaceMatch& m = out.matches[i];
-    m.face = pp.second;
-    m.areas = heron_areas(target, m.face, anchor == HeronAnchor::kProjectedPoint ? point : v);
-  };
   const auto n = static_cast<std::int64_t>(queries.size());
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-  for (std::int64_t i = 0; i < n; ++i) match_one(static_cast<std::size_t>(i));
+  for (std::int64_t i = 0; i < n; ++i) {
+    const Vec3& v = queries[std::size_t(i)];
+    const Hint hint = hints->closest_point(to_point(v));
+    const ClosestPoint c =
+        tree.closest(v, {{hint.first.x(), hint.first.y(), hint.first.z()}, hint.second});
+    out.points[std::size_t(i)] = c.point;
+    SurfaceMatch& m = out.matches[std::size_t(i)];
+    m.face = c.face;
+    m.areas = heron_areas(target, m.face, anchor == HeronAnchor::kProjectedPoint ? c.point : v);
+  }
   return out;
 }
 
