@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -11,8 +12,16 @@
 namespace qm3d::mesh::detail {
 namespace {
 
-/// Node ranges of more faces are built as OpenMP tasks.
+/// Node ranges of more faces (points) are built as OpenMP tasks.
 constexpr std::uint32_t kTaskFaces = 1u << 14;
+/// Points per leaf of NearestPointIndex at most.
+constexpr std::uint32_t kLeafPoints = 8;
+
+/// Nodes of NearestPointIndex's tree over `count` points.
+std::size_t index_nodes(std::uint32_t count) {
+  if (count <= kLeafPoints) return 1;
+  return 1 + index_nodes(count / 2) + index_nodes(count - count / 2);
+}
 
 bool same_point(const Vec3& a, const Vec3& b) {
   return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
@@ -100,6 +109,110 @@ Vec3 project_on_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
     return moved;
   }
   return outside ? nearest_corner(proj, a, b, c) : proj;
+}
+
+struct NearestPointIndex::Search {
+  Vec3 q;
+  std::uint32_t best = 0;  ///< tree position
+  double best_d2 = std::numeric_limits<double>::infinity();
+  bool tie = false;
+};
+
+NearestPointIndex::NearestPointIndex(const std::vector<Vec3>& points,
+                                     const std::vector<std::uint32_t>& ids, int threads) {
+  if (points.empty() || points.size() != ids.size() || points.size() >= 0xffffffffu) {
+    throw std::logic_error("NearestPointIndex: bad point set");
+  }
+  const auto count = static_cast<std::uint32_t>(points.size());
+  std::vector<std::uint32_t> order(count);
+  std::iota(order.begin(), order.end(), 0u);
+  splits_.resize(index_nodes(count));
+#pragma omp parallel num_threads(threads)
+#pragma omp single
+  build(order, 0, 0, count, points);
+  points_.resize(count);
+  ids_.resize(count);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    points_[i] = points[order[i]];
+    ids_[i] = ids[order[i]];
+  }
+}
+
+// Splits at the median along the dimension of largest extent.
+void NearestPointIndex::build(std::vector<std::uint32_t>& order, std::size_t node,
+                              std::uint32_t first, std::uint32_t count,
+                              const std::vector<Vec3>& points) {
+  if (count <= kLeafPoints) return;
+  Vec3 lo = points[order[first]], hi = lo;
+  for (std::uint32_t i = first + 1; i < first + count; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], points[order[i]][k]);
+      hi[k] = std::max(hi[k], points[order[i]][k]);
+    }
+  }
+  int dim = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (hi[k] - lo[k] > hi[dim] - lo[dim]) dim = k;
+  }
+  const std::uint32_t half = count / 2;
+  const auto begin = order.begin() + first;
+  std::nth_element(begin, begin + half, begin + count, [&](std::uint32_t a, std::uint32_t b) {
+    return points[a][dim] < points[b][dim];
+  });
+  Split& split = splits_[node];
+  split.dim = dim;
+  split.value = points[order[first + half]][dim];
+  split.right = static_cast<std::uint32_t>(node + index_nodes(half) + 1);
+  if (count > kTaskFaces) {
+#pragma omp task default(shared) firstprivate(node, first, half)
+    build(order, node + 1, first, half, points);
+#pragma omp task default(shared) firstprivate(first, half, count)
+    build(order, split.right, first + half, count - half, points);
+#pragma omp taskwait
+  } else {
+    build(order, node + 1, first, half, points);
+    build(order, split.right, first + half, count - half, points);
+  }
+}
+
+// The far side of a split is searched when it may hold a point at most as near as the best:
+// its points are at least |q - value| away along the split's dimension, and the rounded
+// distances keep that order.
+void NearestPointIndex::search(std::size_t node, std::uint32_t first, std::uint32_t count,
+                               Search& s) const {
+  if (count <= kLeafPoints) {
+    for (std::uint32_t i = first; i < first + count; ++i) {
+      const Vec3& p = points_[i];
+      // Euclidean_distance::transformed_distance: (q - p)^2 summed over x, y, z.
+      const double dx = s.q[0] - p[0], dy = s.q[1] - p[1], dz = s.q[2] - p[2];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 < s.best_d2) {
+        s.best = i;
+        s.best_d2 = d2;
+        s.tie = false;
+      } else if (d2 == s.best_d2) {
+        s.tie = true;
+      }
+    }
+    return;
+  }
+  const Split& split = splits_[node];
+  const std::uint32_t half = count / 2;
+  const double diff = s.q[split.dim] - split.value;
+  if (diff < 0) {
+    search(node + 1, first, half, s);
+    if (diff * diff <= s.best_d2) search(split.right, first + half, count - half, s);
+  } else {
+    search(split.right, first + half, count - half, s);
+    if (diff * diff <= s.best_d2) search(node + 1, first, half, s);
+  }
+}
+
+NearestPointIndex::Nearest NearestPointIndex::nearest(const Vec3& q) const {
+  Search s;
+  s.q = q;
+  search(0, 0, static_cast<std::uint32_t>(points_.size()), s);
+  return {points_[s.best], ids_[s.best], s.tie};
 }
 
 struct FaceBoxTree::Search {

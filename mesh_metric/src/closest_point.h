@@ -32,6 +32,39 @@ struct ClosestPoint {
   std::uint32_t face = 0;
 };
 
+/// Exact nearest-neighbour search in a set of points with ids (the closest-point search's hints),
+/// telling also whether another point is exactly as near: only then does the answer depend on
+/// the order of the search (CGAL's k-d tree decides such ties by its own). Distances are computed
+/// as CGAL's Euclidean_distance computes them. A k-d tree of median splits, built in parallel.
+class NearestPointIndex {
+ public:
+  NearestPointIndex(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids,
+                    int threads);
+
+  struct Nearest {
+    Vec3 point{0, 0, 0};
+    std::uint32_t id = 0;
+    bool tie = false;  ///< another point is at the same (computed) squared distance
+  };
+  /// The nearest point (at least one point must have been given).
+  Nearest nearest(const Vec3& q) const;
+
+ private:
+  struct Split {
+    double value = 0;
+    std::uint32_t right = 0;  ///< the right child's node (the left one follows its parent)
+    int dim = 0;
+  };
+  struct Search;
+  void build(std::vector<std::uint32_t>& order, std::size_t node, std::uint32_t first,
+             std::uint32_t count, const std::vector<Vec3>& points);
+  void search(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
+
+  std::vector<Vec3> points_;  ///< in tree order
+  std::vector<std::uint32_t> ids_;
+  std::vector<Split> splits_;  ///< one per node (unused in leaves), pre-order
+};
+
 /// CGAL's AABB_tree over the faces of a mesh (primitives in face order, each face's reference
 /// point its first corner), for closest-point queries.
 class FaceBoxTree {

@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <memory>
+#include <mutex>
+#include <optional>
 
 #include "closest_point.h"
 #include "vec3_ops.h"
@@ -76,41 +78,79 @@ std::array<double, 3> heron_areas(const HalfedgeMesh& mesh, std::uint32_t face, 
 // the off-surface query, so that choice moves its score (by 6e-5 on blob4_geonoise): it gets
 // CGAL's default samples exactly as MEPP2's tree takes them (one per face, its first corner, in
 // face order). CMDM interpolates at the projected point, where the tied faces agree, and gets one
-// sample per vertex instead: the same scores in half the memory (42 MB less on a 1.3M-face mesh).
-std::unique_ptr<HintTree> search_hints(const HalfedgeMesh& target, HeronAnchor anchor) {
-  if (anchor == HeronAnchor::kQueryPoint) {
-    const auto to_hint = [&](std::uint32_t f) {
-      return Hint(to_point(target.positions[target.triangles[f][0]]), f);
-    };
-    const boost::counting_iterator<std::uint32_t> first(0);
-    const boost::counting_iterator<std::uint32_t> last(
-        static_cast<std::uint32_t>(target.triangles.size()));
-    return std::make_unique<HintTree>(boost::make_transform_iterator(first, to_hint),
-                                      boost::make_transform_iterator(last, to_hint));
-  }
-  std::vector<std::int64_t> vertex_face(target.positions.size(), -1);
-  for (std::uint32_t f = 0; f < target.triangles.size(); ++f) {
-    for (auto v : target.triangles[f]) {
-      if (vertex_face[v] < 0) vertex_face[v] = f;
+// sample per vertex instead (its first face), found by NearestPointIndex: the same hint as CGAL's
+// k-d tree wherever the nearest sample is unique; where another is exactly as near (coincident
+// vertices), CGAL's k-d tree, built on first need, decides.
+class SearchHints {
+ public:
+  SearchHints(const HalfedgeMesh& target, HeronAnchor anchor, int threads) : target_(target) {
+    if (anchor == HeronAnchor::kQueryPoint) {
+      const auto to_hint = [&](std::uint32_t f) {
+        return Hint(to_point(target.positions[target.triangles[f][0]]), f);
+      };
+      const boost::counting_iterator<std::uint32_t> first(0);
+      const boost::counting_iterator<std::uint32_t> last(
+          static_cast<std::uint32_t>(target.triangles.size()));
+      cgal_ = std::make_unique<HintTree>(boost::make_transform_iterator(first, to_hint),
+                                         boost::make_transform_iterator(last, to_hint));
+      return;
     }
+    const std::vector<std::uint32_t> faces = vertex_faces();
+    std::vector<Vec3> points;
+    std::vector<std::uint32_t> ids;
+    for (std::uint32_t v = 0; v < faces.size(); ++v) {
+      if (faces[v] == kNone) continue;
+      points.push_back(target.positions[v]);
+      ids.push_back(faces[v]);
+    }
+    index_.emplace(points, ids, threads);
   }
-  std::vector<std::uint32_t> hinted;  // vertices with an incident face
-  hinted.reserve(vertex_face.size());
-  for (std::uint32_t v = 0; v < vertex_face.size(); ++v) {
-    if (vertex_face[v] >= 0) hinted.push_back(v);
+
+  ClosestPoint operator()(const Vec3& q) const {
+    if (index_) {
+      const NearestPointIndex::Nearest n = index_->nearest(q);
+      if (!n.tie) return {n.point, n.id};
+      std::call_once(cgal_built_, [this] { cgal_ = cgal_vertex_hints(); });
+    }
+    const Hint h = cgal_->closest_point(to_point(q));
+    return {{h.first.x(), h.first.y(), h.first.z()}, h.second};
   }
-  const auto to_hint = [&](std::uint32_t v) {
-    return Hint(to_point(target.positions[v]), static_cast<std::uint32_t>(vertex_face[v]));
-  };
-  return std::make_unique<HintTree>(boost::make_transform_iterator(hinted.begin(), to_hint),
-                                    boost::make_transform_iterator(hinted.end(), to_hint));
-}
+
+ private:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+
+  // The first face of each vertex (kNone for a vertex without faces).
+  std::vector<std::uint32_t> vertex_faces() const {
+    std::vector<std::uint32_t> face(target_.positions.size(), kNone);
+    for (std::uint32_t f = 0; f < target_.triangles.size(); ++f) {
+      for (auto v : target_.triangles[f]) {
+        if (face[v] == kNone) face[v] = f;
+      }
+    }
+    return face;
+  }
+
+  // CGAL's k-d tree of the vertex samples, given in vertex order.
+  std::unique_ptr<HintTree> cgal_vertex_hints() const {
+    const std::vector<std::uint32_t> faces = vertex_faces();
+    std::vector<Hint> hints;
+    for (std::uint32_t v = 0; v < faces.size(); ++v) {
+      if (faces[v] != kNone) hints.emplace_back(to_point(target_.positions[v]), faces[v]);
+    }
+    return std::make_unique<HintTree>(hints.begin(), hints.end());
+  }
+
+  const HalfedgeMesh& target_;
+  std::optional<NearestPointIndex> index_;
+  mutable std::once_flag cgal_built_;
+  mutable std::unique_ptr<HintTree> cgal_;
+};
 
 }  // namespace
 
 SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
                                 HeronAnchor anchor, int threads) {
-  const std::unique_ptr<HintTree> hints = search_hints(target, anchor);
+  const SearchHints hints(target, anchor, threads);
   const FaceBoxTree tree(target.positions, target.triangles, threads);
   SurfaceMatches out;
   out.points.resize(queries.size());
@@ -119,9 +159,7 @@ SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMe
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3& v = queries[std::size_t(i)];
-    const Hint hint = hints->closest_point(to_point(v));
-    const ClosestPoint c =
-        tree.closest(v, {{hint.first.x(), hint.first.y(), hint.first.z()}, hint.second});
+    const ClosestPoint c = tree.closest(v, hints(v));
     out.points[std::size_t(i)] = c.point;
     SurfaceMatch& m = out.matches[std::size_t(i)];
     m.face = c.face;

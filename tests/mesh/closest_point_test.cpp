@@ -7,11 +7,14 @@
 #include <CGAL/AABB_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_tree/internal/AABB_search_tree.h>
 #include <CGAL/Simple_cartesian.h>
 #include <boost/iterator/counting_iterator.hpp>
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
+#include <numeric>
 #include <random>
 
 #include "../test_paths.h"
@@ -162,6 +165,86 @@ TEST(ClosestPoint, FaceBoxTreeGivesCgalsPointAndFaceOnReferenceMeshes) {
     const ColoredMesh t = read_mesh(dir / target).mesh;
     const ColoredMesh q = read_mesh(dir / query).mesh;
     expect_cgals_answers(t, with_jitter(q.positions, 1e-3, rng));
+  }
+}
+
+// The nearest point by brute force, and whether another is exactly as near.
+NearestPointIndex::Nearest brute_force_nearest(const std::vector<Vec3>& points,
+                                               const std::vector<std::uint32_t>& ids,
+                                               const Vec3& q) {
+  NearestPointIndex::Nearest best;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double dx = q[0] - points[i][0], dy = q[1] - points[i][1], dz = q[2] - points[i][2];
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = {points[i], ids[i], false};
+    } else if (d2 == best_d2) {
+      best.tie = true;
+    }
+  }
+  return best;
+}
+
+TEST(ClosestPoint, NearestPointIndexIsExactAndReportsTies) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uniform_int_distribution<int> grid(-6, 6);
+  for (const bool on_grid : {false, true}) {
+    std::vector<Vec3> points;
+    for (int i = 0; i < 3000; ++i) {
+      points.push_back(on_grid ? Vec3{double(grid(rng)), double(grid(rng)), double(grid(rng))}
+                               : Vec3{u(rng), u(rng), u(rng)});
+    }
+    for (int i = 0; i < 200; ++i) points.push_back(points[std::size_t(i) * 7]);  // duplicates
+    std::vector<std::uint32_t> ids(points.size());
+    std::iota(ids.begin(), ids.end(), 100u);
+    std::size_t ties = 0;
+    for (int threads : {1, 2}) {
+      const NearestPointIndex index(points, ids, threads);
+      for (int k = 0; k < 2000; ++k) {
+        const Vec3 q = k % 3 == 0 ? points[std::size_t(k)]
+                                  : Vec3{grid(rng) / 2.0, grid(rng) / 2.0, u(rng) * 3};
+        const auto expected = brute_force_nearest(points, ids, q);
+        const auto found = index.nearest(q);
+        ASSERT_EQ(found.tie, expected.tie) << k;
+        if (!expected.tie) {
+          ASSERT_EQ(found.id, expected.id);
+          ASSERT_TRUE(same_bits(found.point, expected.point));
+        } else {
+          ++ties;
+        }
+      }
+    }
+    EXPECT_GT(ties, 50u);
+  }
+}
+
+// Where the nearest vertex is unique, it is the hint CGAL's k-d tree (AABB_search_tree) gives.
+TEST(ClosestPoint, UniqueNearestVertexIsCgalsHint) {
+  using Traits = CGAL::AABB_traits<Kernel, Primitive>;
+  for (const char* name : {"cmdm/blob4_bothnoise.off", "quantised/blob5_pquant6.off"}) {
+    SCOPED_TRACE(name);
+    const ColoredMesh mesh = read_mesh(test::reference_dir() / name).mesh;
+    std::vector<std::uint32_t> ids(mesh.positions.size());
+    std::iota(ids.begin(), ids.end(), 0u);
+    std::vector<Traits::Point_and_primitive_id> hints;
+    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
+      hints.emplace_back(to_point(mesh.positions[v]), v);
+    }
+    const CGAL::AABB_search_tree<Traits> cgal(hints.begin(), hints.end());
+    const NearestPointIndex index(mesh.positions, ids, 2);
+    const ColoredMesh other = read_mesh(test::reference_dir() / "cmdm/blob5_ref.off").mesh;
+    std::size_t unique = 0;
+    for (const Vec3& q : other.positions) {
+      const auto found = index.nearest(q);
+      if (found.tie) continue;
+      const auto expected = cgal.closest_point(to_point(q));
+      ASSERT_EQ(found.id, expected.second);
+      ++unique;
+    }
+    EXPECT_GT(unique, other.positions.size() / 2);
   }
 }
 
