@@ -5,6 +5,7 @@
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <cmath>
 #include <limits>
 #include <map>
 
@@ -143,6 +144,14 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
   for (std::uint32_t i = 0; i < out.input_vertex.size(); ++i) out.input_vertex[i] = i;
   valid_triangles(mesh, name, out);
   if (out.triangles.size() == 0) throw FormatError(name + ": no valid faces");
+  // The readers refuse them; a mesh given in memory may hold them (the search trees' median
+  // splits need ordered coordinates).
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const Vec3& p = mesh.positions[v];
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      throw FormatError(name + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
+    }
+  }
 
   // Face by face as MEPP2's reader adds them (Euler::add_face), which fails on a non-manifold
   // configuration; such a mesh is repaired into a CGAL Surface_mesh.

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -12,6 +13,7 @@
 #include "qm3d/common/error.h"
 #include "progress_recorder.h"
 #include "qm3d/mesh/mesh_io.h"
+#include "qm3d/mesh/msdm2.h"
 #include "test_paths.h"
 
 namespace qm3d::mesh {
@@ -264,6 +266,26 @@ TEST(Cmdm, WeightsAndScalesAreOptions) {
 TEST(Cmdm, ZeroSizeMeshIsANumericError) {
   ColoredMesh flat{{{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{0, 1, 2}}};
   EXPECT_THROW(compute_cmdm(flat, flat), NumericError);
+}
+
+// A mesh built in memory is not checked by a reader: a NaN coordinate is an error naming the
+// vertex, in either mesh and for MSDM2 too (the search trees need ordered coordinates).
+TEST(Cmdm, NonFiniteCoordinateGivenInMemoryIsAFormatError) {
+  const ColoredMesh good = read_mesh(mesh_path("blob4_ref.off")).mesh;
+  ColoredMesh bad = good;
+  bad.positions[7][1] = std::numeric_limits<double>::quiet_NaN();
+  const ColoredMesh& bad_ref = bad;
+  for (const auto& [a, b] : {std::pair{&good, &bad_ref}, std::pair{&bad_ref, &good}}) {
+    try {
+      compute_cmdm(*a, *b);
+      ADD_FAILURE() << "no error";
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 7 has a non-finite coordinate"), std::string::npos)
+          << e.what();
+    }
+  }
+  bad.positions[7][1] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(compute_msdm2(good, bad), FormatError);
 }
 
 }  // namespace
