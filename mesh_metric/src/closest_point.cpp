@@ -118,30 +118,33 @@ struct NearestPointIndex::Search {
   bool tie = false;
 };
 
-NearestPointIndex::NearestPointIndex(const std::vector<Vec3>& points,
+NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
+                                     const std::vector<std::uint32_t>& which,
                                      const std::vector<std::uint32_t>& ids, int threads) {
-  if (points.empty() || points.size() != ids.size() || points.size() >= 0xffffffffu) {
+  if (which.empty() || which.size() != ids.size() || which.size() >= 0xffffffffu) {
     throw std::logic_error("NearestPointIndex: bad point set");
   }
-  const auto count = static_cast<std::uint32_t>(points.size());
-  std::vector<std::uint32_t> order(count);
-  std::iota(order.begin(), order.end(), 0u);
+  const auto count = static_cast<std::uint32_t>(which.size());
+  std::vector<std::uint32_t> order = which;  // sorted into tree order by the build
   splits_.resize(index_nodes(count));
 #pragma omp parallel num_threads(threads)
 #pragma omp single
-  build(order, 0, 0, count, points);
+  build(order, 0, 0, count, positions);
+  // Back from points to ids: the position of each point in `which`.
+  std::vector<std::uint32_t> slot(positions.size());
+  for (std::uint32_t i = 0; i < count; ++i) slot[which[i]] = i;
   points_.resize(count);
   ids_.resize(count);
   for (std::uint32_t i = 0; i < count; ++i) {
-    points_[i] = points[order[i]];
-    ids_[i] = ids[order[i]];
+    points_[i] = positions[order[i]];
+    ids_[i] = ids[slot[order[i]]];
   }
 }
 
 // Splits at the median along the dimension of largest extent.
 void NearestPointIndex::build(std::vector<std::uint32_t>& order, std::size_t node,
                               std::uint32_t first, std::uint32_t count,
-                              const std::vector<Vec3>& points) {
+                              const ArrayView<Vec3>& points) {
   if (count <= kLeafPoints) return;
   Vec3 lo = points[order[first]], hi = lo;
   for (std::uint32_t i = first + 1; i < first + count; ++i) {

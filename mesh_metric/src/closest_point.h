@@ -38,8 +38,9 @@ struct ClosestPoint {
 /// as CGAL's Euclidean_distance computes them. A k-d tree of median splits, built in parallel.
 class NearestPointIndex {
  public:
-  NearestPointIndex(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& ids,
-                    int threads);
+  /// The points positions[which[i]] with ids ids[i].
+  NearestPointIndex(const ArrayView<Vec3>& positions, const std::vector<std::uint32_t>& which,
+                    const std::vector<std::uint32_t>& ids, int threads);
 
   struct Nearest {
     Vec3 point{0, 0, 0};
@@ -57,7 +58,7 @@ class NearestPointIndex {
   };
   struct Search;
   void build(std::vector<std::uint32_t>& order, std::size_t node, std::uint32_t first,
-             std::uint32_t count, const std::vector<Vec3>& points);
+             std::uint32_t count, const ArrayView<Vec3>& positions);
   void search(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
   std::vector<Vec3> points_;  ///< in tree order

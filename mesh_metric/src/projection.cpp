@@ -7,6 +7,7 @@
 #include <boost/iterator/counting_iterator.hpp>
 #include <boost/iterator/transform_iterator.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -95,15 +96,13 @@ class SearchHints {
                                          boost::make_transform_iterator(last, to_hint));
       return;
     }
-    const std::vector<std::uint32_t> faces = vertex_faces();
-    std::vector<Vec3> points;
-    std::vector<std::uint32_t> ids;
+    std::vector<std::uint32_t> faces = vertex_faces();
+    std::vector<std::uint32_t> vertices;
     for (std::uint32_t v = 0; v < faces.size(); ++v) {
-      if (faces[v] == kNone) continue;
-      points.push_back(target.positions[v]);
-      ids.push_back(faces[v]);
+      if (faces[v] != kNone) vertices.push_back(v);
     }
-    index_.emplace(points, ids, threads);
+    faces.erase(std::remove(faces.begin(), faces.end(), kNone), faces.end());
+    index_.emplace(target.positions, vertices, faces, threads);
   }
 
   ClosestPoint operator()(const Vec3& q) const {

@@ -198,15 +198,21 @@ TEST(ClosestPoint, NearestPointIndexIsExactAndReportsTies) {
                                : Vec3{u(rng), u(rng), u(rng)});
     }
     for (int i = 0; i < 200; ++i) points.push_back(points[std::size_t(i) * 7]);  // duplicates
-    std::vector<std::uint32_t> ids(points.size());
-    std::iota(ids.begin(), ids.end(), 100u);
+    // Every other point, with ids of their own.
+    std::vector<std::uint32_t> which, ids;
+    std::vector<Vec3> chosen;
+    for (std::uint32_t i = 0; i < points.size(); i += 2) {
+      which.push_back(i);
+      ids.push_back(1000 + i);
+      chosen.push_back(points[i]);
+    }
     std::size_t ties = 0;
     for (int threads : {1, 2}) {
-      const NearestPointIndex index(points, ids, threads);
+      const NearestPointIndex index({points.data(), points.size()}, which, ids, threads);
       for (int k = 0; k < 2000; ++k) {
         const Vec3 q = k % 3 == 0 ? points[std::size_t(k)]
                                   : Vec3{grid(rng) / 2.0, grid(rng) / 2.0, u(rng) * 3};
-        const auto expected = brute_force_nearest(points, ids, q);
+        const auto expected = brute_force_nearest(chosen, ids, q);
         const auto found = index.nearest(q);
         ASSERT_EQ(found.tie, expected.tie) << k;
         if (!expected.tie) {
@@ -234,7 +240,7 @@ TEST(ClosestPoint, UniqueNearestVertexIsCgalsHint) {
       hints.emplace_back(to_point(mesh.positions[v]), v);
     }
     const CGAL::AABB_search_tree<Traits> cgal(hints.begin(), hints.end());
-    const NearestPointIndex index(mesh.positions, ids, 2);
+    const NearestPointIndex index({mesh.positions.data(), mesh.positions.size()}, ids, ids, 2);
     const ColoredMesh other = read_mesh(test::reference_dir() / "cmdm/blob5_ref.off").mesh;
     std::size_t unique = 0;
     for (const Vec3& q : other.positions) {
