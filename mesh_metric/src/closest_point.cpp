@@ -121,7 +121,7 @@ struct NearestPointIndex::Search {
 NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
                                      const std::vector<std::uint32_t>& which,
                                      const std::vector<std::uint32_t>& ids, int threads) {
-  if (which.empty() || which.size() != ids.size() || which.size() >= 0xffffffffu) {
+  if (which.empty() || ids.size() != positions.size() || which.size() >= 0xffffffffu) {
     throw std::logic_error("NearestPointIndex: bad point set");
   }
   const auto count = static_cast<std::uint32_t>(which.size());
@@ -130,14 +130,11 @@ NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
 #pragma omp parallel num_threads(threads)
 #pragma omp single
   build(order, 0, 0, count, positions);
-  // Back from points to ids: the position of each point in `which`.
-  std::vector<std::uint32_t> slot(positions.size());
-  for (std::uint32_t i = 0; i < count; ++i) slot[which[i]] = i;
   points_.resize(count);
   ids_.resize(count);
   for (std::uint32_t i = 0; i < count; ++i) {
     points_[i] = positions[order[i]];
-    ids_[i] = ids[slot[order[i]]];
+    ids_[i] = ids[order[i]];
   }
 }
 
@@ -185,10 +182,8 @@ void NearestPointIndex::search(std::size_t node, std::uint32_t first, std::uint3
                                Search& s) const {
   if (count <= kLeafPoints) {
     for (std::uint32_t i = first; i < first + count; ++i) {
-      const Vec3& p = points_[i];
       // Euclidean_distance::transformed_distance: (q - p)^2 summed over x, y, z.
-      const double dx = s.q[0] - p[0], dy = s.q[1] - p[1], dz = s.q[2] - p[2];
-      const double d2 = dx * dx + dy * dy + dz * dz;
+      const double d2 = squared_distance(points_[i], s.q);
       if (d2 < s.best_d2) {
         s.best = i;
         s.best_d2 = d2;

@@ -38,7 +38,8 @@ struct ClosestPoint {
 /// as CGAL's Euclidean_distance computes them. A k-d tree of median splits, built in parallel.
 class NearestPointIndex {
  public:
-  /// The points positions[which[i]] with ids ids[i].
+  /// The points positions[v] for v in `which`, each with the id ids[v] (`ids` has one entry per
+  /// position; only those of `which` are read).
   NearestPointIndex(const ArrayView<Vec3>& positions, const std::vector<std::uint32_t>& which,
                     const std::vector<std::uint32_t>& ids, int threads);
 

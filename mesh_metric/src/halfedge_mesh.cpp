@@ -2,13 +2,12 @@
 
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Simple_cartesian.h>
-#include <CGAL/Surface_mesh.h>
 
 #include <cmath>
 #include <limits>
 #include <map>
 
+#include "cgal_mesh.h"
 #include "qm3d/common/error.h"
 #include "triangle_connectivity.h"
 #include "vec3_ops.h"
@@ -16,9 +15,6 @@
 namespace qm3d::mesh::detail {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point = Kernel::Point_3;
-using SurfaceMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 // Repairs a non-manifold soup by duplicating vertices (which become owned copies of the input's),
@@ -52,6 +48,8 @@ void build_from_soup(const ColoredMesh& input, std::vector<Triangle> tris, Halfe
   }
 }
 
+}  // namespace
+
 RingFaces extract_rings(const SurfaceMesh& sm) {
   RingFaces r;
   r.offsets.reserve(sm.number_of_vertices() + 1);
@@ -78,7 +76,11 @@ RingFaces extract_rings(const SurfaceMesh& sm) {
   return r;
 }
 
-}  // namespace
+void check_finite(const Vec3& p, std::size_t index, const std::string& name) {
+  if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+    throw FormatError(name + ": vertex " + std::to_string(index) + " has a non-finite coordinate");
+  }
+}
 
 Vec3 face_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 n = cross(sub(c, b), sub(a, b));
@@ -146,12 +148,7 @@ HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& nam
   if (out.triangles.size() == 0) throw FormatError(name + ": no valid faces");
   // The readers refuse them; a mesh given in memory may hold them (the search trees' median
   // splits need ordered coordinates).
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const Vec3& p = mesh.positions[v];
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      throw FormatError(name + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
-    }
-  }
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) check_finite(mesh.positions[v], v, name);
 
   // Face by face as MEPP2's reader adds them (Euler::add_face), which fails on a non-manifold
   // configuration; such a mesh is repaired into a CGAL Surface_mesh.

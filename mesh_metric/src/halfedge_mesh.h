@@ -73,6 +73,10 @@ struct HalfedgeMesh {
 HalfedgeMesh build_halfedge_mesh(const ColoredMesh& mesh, const std::string& name,
                                  DegenerateEdges degenerate_edges, int threads);
 
+/// Throws FormatError "<name>: vertex <index> has a non-finite coordinate" unless p is finite
+/// (the readers check every vertex they read; build_halfedge_mesh checks meshes given in memory).
+void check_finite(const Vec3& p, std::size_t index, const std::string& name);
+
 /// Unit normal of face (a, b, c) as MEPP2 computes it: calculate_face_normal.hpp takes the
 /// face's first vertex a as p0 and returns CGAL::unit_normal(b, c, a) = (c - b) x (a - b),
 /// divided by its length; all components NaN when that cross product is exactly zero. The order

@@ -8,11 +8,13 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
 #include "qm3d/mesh/texture.h"
+#include "halfedge_mesh.h"
 #include "text_lines.h"
 
 namespace qm3d::mesh {
 namespace {
 
+using detail::check_finite;
 using detail::LineReader;
 using detail::Statements;
 using detail::Tokens;
@@ -29,12 +31,6 @@ struct RawMesh {
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
   throw FormatError(file + ": " + what);
-}
-
-void check_finite(const Vec3& p, std::size_t index, const std::string& file) {
-  if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-    fail(file, "vertex " + std::to_string(index) + " has a non-finite coordinate");
-  }
 }
 
 // Reads n numbers from the tokens; false if fewer are present; error if one is not a number.

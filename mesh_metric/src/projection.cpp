@@ -1,60 +1,24 @@
 #include "projection.h"
 
-#include <CGAL/AABB_primitive.h>
-#include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree/internal/AABB_search_tree.h>
-#include <CGAL/Simple_cartesian.h>
 #include <boost/iterator/counting_iterator.hpp>
 #include <boost/iterator/transform_iterator.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
 #include <optional>
 
+#include "cgal_mesh.h"
 #include "closest_point.h"
 #include "vec3_ops.h"
 
 namespace qm3d::mesh::detail {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point = Kernel::Point_3;
-using Triangle3 = Kernel::Triangle_3;
-
-Point to_point(const Vec3& p) { return Point(p[0], p[1], p[2]); }
-
-// CGAL's AABB traits for face ids, as MEPP2's tree has them (the maps give a face's triangle and
-// its reference point, its first corner): the k-d tree of search hints is CGAL's own, whose
-// choice among equidistant hints decides ties too, and needs them.
-struct FaceTriangleMap {
-  const HalfedgeMesh* mesh = nullptr;
-  using key_type = std::uint32_t;
-  using value_type = Triangle3;
-  using reference = Triangle3;
-  using category = boost::readable_property_map_tag;
-  friend Triangle3 get(const FaceTriangleMap& m, std::uint32_t f) {
-    const auto& t = m.mesh->triangles[f];
-    const auto& p = m.mesh->positions;
-    return Triangle3(to_point(p[t[0]]), to_point(p[t[1]]), to_point(p[t[2]]));
-  }
-};
-
-struct FacePointMap {
-  const HalfedgeMesh* mesh = nullptr;
-  using key_type = std::uint32_t;
-  using value_type = Point;
-  using reference = Point;
-  using category = boost::readable_property_map_tag;
-  friend Point get(const FacePointMap& m, std::uint32_t f) {
-    return to_point(m.mesh->positions[m.mesh->triangles[f][0]]);
-  }
-};
-
-using Primitive = CGAL::AABB_primitive<std::uint32_t, FaceTriangleMap, FacePointMap,
-                                       CGAL::Tag_true /*external maps*/, CGAL::Tag_false>;
-using Traits = CGAL::AABB_traits<Kernel, Primitive>;
+// CGAL's k-d tree of search hints (its choice among equidistant hints decides ties too) takes
+// the AABB traits of MEPP2's tree.
+using Traits = FaceTraits;
 using HintTree = CGAL::AABB_search_tree<Traits>;
 using Hint = Traits::Point_and_primitive_id;
 
@@ -96,12 +60,11 @@ class SearchHints {
                                          boost::make_transform_iterator(last, to_hint));
       return;
     }
-    std::vector<std::uint32_t> faces = vertex_faces();
+    const std::vector<std::uint32_t> faces = vertex_faces();
     std::vector<std::uint32_t> vertices;
     for (std::uint32_t v = 0; v < faces.size(); ++v) {
       if (faces[v] != kNone) vertices.push_back(v);
     }
-    faces.erase(std::remove(faces.begin(), faces.end(), kNone), faces.end());
     index_.emplace(target.positions, vertices, faces, threads);
   }
 

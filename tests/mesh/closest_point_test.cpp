@@ -4,11 +4,8 @@
 // faces make the traversal order decide), whatever the thread count of the build.
 #include "closest_point.h"
 
-#include <CGAL/AABB_primitive.h>
-#include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_tree/internal/AABB_search_tree.h>
-#include <CGAL/Simple_cartesian.h>
 #include <boost/iterator/counting_iterator.hpp>
 #include <gtest/gtest.h>
 
@@ -18,15 +15,12 @@
 #include <random>
 
 #include "../test_paths.h"
+#include "cgal_mesh.h"
 #include "qm3d/mesh/mesh_io.h"
 
 namespace qm3d::mesh::detail {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Point = Kernel::Point_3;
-
-Point to_point(const Vec3& p) { return Point(p[0], p[1], p[2]); }
 bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(&a, &b, sizeof(Vec3)) == 0; }
 
 Vec3 cgal_projection(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& q) {
@@ -84,43 +78,22 @@ TEST(ClosestPoint, ProjectionOnATriangleIsCgalsBitForBit) {
 }
 
 // CGAL's tree over the faces as MEPP2 (and qm3d before FaceBoxTree) builds it.
-struct FaceTriangleMap {
-  const ColoredMesh* mesh = nullptr;
-  using key_type = std::uint32_t;
-  using value_type = Kernel::Triangle_3;
-  using reference = Kernel::Triangle_3;
-  using category = boost::readable_property_map_tag;
-  friend Kernel::Triangle_3 get(const FaceTriangleMap& m, std::uint32_t f) {
-    const auto& t = m.mesh->triangles[f];
-    const auto& p = m.mesh->positions;
-    return {to_point(p[t[0]]), to_point(p[t[1]]), to_point(p[t[2]])};
-  }
-};
-struct FacePointMap {
-  const ColoredMesh* mesh = nullptr;
-  using key_type = std::uint32_t;
-  using value_type = Point;
-  using reference = Point;
-  using category = boost::readable_property_map_tag;
-  friend Point get(const FacePointMap& m, std::uint32_t f) {
-    return to_point(m.mesh->positions[m.mesh->triangles[f][0]]);
-  }
-};
-using Primitive = CGAL::AABB_primitive<std::uint32_t, FaceTriangleMap, FacePointMap,
-                                       CGAL::Tag_true, CGAL::Tag_false>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+using Tree = CGAL::AABB_tree<FaceTraits>;
 
 // Every vertex of `queries` (and a jittered copy) on `target`, from two hints each: CGAL's own
 // default (the nearest face's first corner) and a fixed far one; CGAL and FaceBoxTree (built
 // with 1 and 2 threads) must agree on the point and the face.
 void expect_cgals_answers(const ColoredMesh& target, const std::vector<Vec3>& queries) {
+  HalfedgeMesh mesh;  // views of the target's arrays: all the maps read
+  mesh.positions = {target.positions.data(), target.positions.size()};
+  mesh.triangles = {target.triangles.data(), target.triangles.size()};
   Tree cgal(boost::counting_iterator<std::uint32_t>(0),
             boost::counting_iterator<std::uint32_t>(std::uint32_t(target.triangles.size())),
-            FaceTriangleMap{&target}, FacePointMap{&target});
+            FaceTriangleMap{&mesh}, FacePointMap{&mesh});
   cgal.accelerate_distance_queries();
   cgal.build();
-  const ArrayView<Vec3> positions{target.positions.data(), target.positions.size()};
-  const ArrayView<Triangle> triangles{target.triangles.data(), target.triangles.size()};
+  const ArrayView<Vec3>& positions = mesh.positions;
+  const ArrayView<Triangle>& triangles = mesh.triangles;
   const Vec3 far_corner = target.positions[target.triangles.back()[2]];
   const Tree::Point_and_primitive_id far_hint(to_point(far_corner),
                                               std::uint32_t(target.triangles.size() - 1));
@@ -198,13 +171,14 @@ TEST(ClosestPoint, NearestPointIndexIsExactAndReportsTies) {
                                : Vec3{u(rng), u(rng), u(rng)});
     }
     for (int i = 0; i < 200; ++i) points.push_back(points[std::size_t(i) * 7]);  // duplicates
-    // Every other point, with ids of their own.
-    std::vector<std::uint32_t> which, ids;
+    // Every other point, each point with an id of its own.
+    std::vector<std::uint32_t> which, ids(points.size()), chosen_ids;
+    std::iota(ids.begin(), ids.end(), 1000u);
     std::vector<Vec3> chosen;
     for (std::uint32_t i = 0; i < points.size(); i += 2) {
       which.push_back(i);
-      ids.push_back(1000 + i);
       chosen.push_back(points[i]);
+      chosen_ids.push_back(ids[i]);
     }
     std::size_t ties = 0;
     for (int threads : {1, 2}) {
@@ -212,7 +186,7 @@ TEST(ClosestPoint, NearestPointIndexIsExactAndReportsTies) {
       for (int k = 0; k < 2000; ++k) {
         const Vec3 q = k % 3 == 0 ? points[std::size_t(k)]
                                   : Vec3{grid(rng) / 2.0, grid(rng) / 2.0, u(rng) * 3};
-        const auto expected = brute_force_nearest(chosen, ids, q);
+        const auto expected = brute_force_nearest(chosen, chosen_ids, q);
         const auto found = index.nearest(q);
         ASSERT_EQ(found.tie, expected.tie) << k;
         if (!expected.tie) {
@@ -229,7 +203,7 @@ TEST(ClosestPoint, NearestPointIndexIsExactAndReportsTies) {
 
 // Where the nearest vertex is unique, it is the hint CGAL's k-d tree (AABB_search_tree) gives.
 TEST(ClosestPoint, UniqueNearestVertexIsCgalsHint) {
-  using Traits = CGAL::AABB_traits<Kernel, Primitive>;
+  using Traits = FaceTraits;
   for (const char* name : {"cmdm/blob4_bothnoise.off", "quantised/blob5_pquant6.off"}) {
     SCOPED_TRACE(name);
     const ColoredMesh mesh = read_mesh(test::reference_dir() / name).mesh;

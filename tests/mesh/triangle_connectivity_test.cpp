@@ -5,41 +5,17 @@
 // soups full of non-manifold faces.
 #include "triangle_connectivity.h"
 
-#include <CGAL/Simple_cartesian.h>
-#include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 
 #include "../test_paths.h"
+#include "cgal_mesh.h"
 #include "qm3d/mesh/mesh_io.h"
 
 namespace qm3d::mesh::detail {
 namespace {
-
-using SurfaceMesh = CGAL::Surface_mesh<CGAL::Simple_cartesian<double>::Point_3>;
-
-RingFaces cgal_rings(const SurfaceMesh& sm) {
-  RingFaces r;
-  r.offsets.push_back(0);
-  const auto face_id = [&](SurfaceMesh::Halfedge_index h) {
-    const auto f = sm.face(h);
-    return f == SurfaceMesh::null_face() ? kNoFace : static_cast<std::int32_t>(f);
-  };
-  for (auto v : sm.vertices()) {
-    const auto h0 = sm.halfedge(v);
-    if (h0 != SurfaceMesh::null_halfedge()) {
-      for (auto h : halfedges_around_target(h0, sm)) {
-        r.source.push_back(static_cast<std::uint32_t>(sm.source(h)));
-        r.face.push_back(face_id(h));
-        r.opposite_face.push_back(face_id(sm.opposite(h)));
-      }
-    }
-    r.offsets.push_back(static_cast<std::uint32_t>(r.source.size()));
-  }
-  return r;
-}
 
 // Adds every face to both (after a failure too: both leave the mesh as it was) and compares.
 // Returns how many faces were refused.
@@ -55,7 +31,7 @@ std::size_t expect_same_as_cgal(std::size_t vertices, const std::vector<Triangle
     EXPECT_EQ(ours.add_face(t), cgal) << "face " << f;
     refused += cgal ? 0 : 1;
   }
-  const RingFaces expected = cgal_rings(sm);
+  const RingFaces expected = extract_rings(sm);
   const RingFaces found = ours.rings();
   EXPECT_EQ(found.offsets, expected.offsets);
   EXPECT_EQ(found.source, expected.source);
