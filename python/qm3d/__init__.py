@@ -24,7 +24,9 @@ Results do not depend on the thread count.
 """
 
 import inspect as _inspect
+import atexit as _atexit
 import json as _json
+import math as _math
 import os as _os
 
 import numpy as _np
@@ -32,6 +34,10 @@ import numpy as _np
 from . import _qm3d
 
 __version__ = _qm3d.__version__
+
+# A metric call interrupted by Ctrl-C returns at once; its worker stops at its next stage
+# boundary on its own thread, and the interpreter waits for it before shutting down.
+_atexit.register(_qm3d.wait_for_interrupted_calls)
 
 InputError = _qm3d.InputError
 """A file cannot be found or read (a subclass of OSError)."""
@@ -234,9 +240,25 @@ def _option_value(spec, option, value):
     if isinstance(default, float):
         if not isinstance(value, (int, float, _np.integer, _np.floating)) or isinstance(value, bool):
             raise ValueError(f"{name}: expected a number, got {value!r}")
-        return float(value)
+        return _finite(name, value)
     if isinstance(default, list):
-        return [float(v) for v in value]
+        return [_finite(name, v) for v in value]
+    return value
+
+
+def _thread_count(threads):
+    if isinstance(threads, bool) or not isinstance(threads, (int, _np.integer)):
+        raise ValueError(f"threads: expected an integer, got {threads!r}")
+    if not 0 <= threads <= 2**31 - 1:
+        raise ValueError(f"threads: expected 0 (all cores) or a positive count, got {threads}")
+    return int(threads)
+
+
+def _finite(name, value):
+    # JSON has no NaN or infinity: a non-finite option is refused here, as the tool refuses it.
+    value = float(value)
+    if not _math.isfinite(value):
+        raise ValueError(f"{name}: expected a finite number, got {value!r}")
     return value
 
 
@@ -270,13 +292,14 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
             run["weights"] = model_weights(model)
         else:
             model_path = _os.fsdecode(model)
-    weights = None if run["weights"] is None else [float(w) for w in run["weights"]]
+    weights = (None if run["weights"] is None
+               else [_finite(f"{name}: weights", w) for w in run["weights"]])
     # Inputs made for this call alone are freed as soon as the metric holds its own copies.
     release = release or (ref_inputs is None and dist_inputs is None)
     ref_inputs = ref_inputs or _Inputs(reference, "reference")
     dist_inputs = dist_inputs or _Inputs(distorted, "distorted")
     result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
-                       _json.dumps(options), run["direction"], int(run["threads"]),
+                       _json.dumps(options), run["direction"], _thread_count(run["threads"]),
                        bool(run["per_element"]),
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
                        else (_DEFAULT_TABLES or ""),

@@ -22,6 +22,7 @@
 #include "qm3d/mesh/mesh_io.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/pointcloud/metrics.h"
+#include "interruptible_call.h"
 
 namespace py = pybind11;
 
@@ -223,23 +224,39 @@ MetricResult run(const std::string& metric, const Input& reference, const Input&
   } else if (a.model_path) {
     run.model = read_model_for(*a.model_path, spec.model_name());
   }
+  // The user's callback, released with the GIL held wherever its last holder ends (a worker
+  // whose caller was interrupted may outlive the call).
+  std::shared_ptr<py::object> callback;
   if (!a.progress.is_none()) {
-    // Called from the metric's thread with the GIL released: take it for the call.
-    py::object callback = a.progress;
-    run.progress = [callback](const std::string& stage, double fraction) {
+    callback.reset(new py::object(a.progress), [](py::object* o) {
       py::gil_scoped_acquire gil;
-      callback(stage, fraction);
-    };
-  }
-  if (a.release_inputs) {
-    run.inputs_done = [&reference, &distorted] {
-      reference.release();
-      distorted.release();
-    };
+      delete o;
+    });
   }
   const nlohmann::json options = nlohmann::json::parse(a.options_json);
-  py::gil_scoped_release release;
-  return run_metric(spec, reference, distorted, run, options);
+  // Copies of the handles: the worker keeps the inputs alive even if Python drops them.
+  const Input ref = reference, dist = distorted;
+  const bool release_inputs = a.release_inputs;
+  return call_interruptibly<MetricResult>(
+      [&spec, run, options, callback, ref, dist, release_inputs](
+          const std::atomic<bool>& cancelled) mutable {
+        // Every stage boundary checks for Ctrl-C; the user's callback (if any) is called with
+        // the GIL, from the worker thread.
+        run.progress = [&cancelled, callback](const std::string& stage, double fraction) {
+          if (cancelled) throw CallCancelled();
+          if (!callback) return;
+          py::gil_scoped_acquire gil;
+          if (cancelled) throw CallCancelled();
+          (*callback)(stage, fraction);
+        };
+        if (release_inputs) {
+          run.inputs_done = [ref, dist] {
+            ref.release();
+            dist.release();
+          };
+        }
+        return run_metric(spec, ref, dist, run, options);
+      });
 }
 
 }  // namespace
@@ -372,6 +389,13 @@ PYBIND11_MODULE(_qm3d, m) {
         return j.dump();
       },
       py::arg("scores"), py::arg("mos"), py::arg("ci95"), py::arg("bootstrap"), py::arg("seed"));
+
+  // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
+  // finish their current stage on their own threads; they must be gone before Python is.
+  m.def("wait_for_interrupted_calls", [] {
+    py::gil_scoped_release release;
+    AbandonedWorkers::instance().wait_all();
+  });
 
   m.def("load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
         py::arg("path"));

@@ -4,7 +4,6 @@ concurrency. Run by ctest (python_tests) with PYTHONPATH set to the build's pyth
 import json
 import os
 import subprocess
-import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -207,24 +206,10 @@ def test_bad_files_and_options_raise_typed_errors(tmp_path):
 
 # ---- the GIL is released -------------------------------------------------------------------
 
-def test_two_threads_score_two_pairs_faster_than_one_after_the_other():
-    if (os.cpu_count() or 1) < 2:
-        pytest.skip("needs two cores")
-    # Two pairs of equal cost (the ideal ratio is then 1/2), each on one thread.
+def test_two_threads_score_two_pairs_like_one_after_the_other():
+    # Concurrent calls give the sequential results (the GIL itself: test_hostile_python.py).
     pairs = [(CLOUD_REF, CLOUD_DIST), (CLOUD_DIST, CLOUD_REF)]
     run = lambda pair: qm3d.pcqm(*pair, threads=1, radius=0.008).score
-    expected = [run(p) for p in pairs]  # also warms the tables up
-    best = float("inf")
-    for _ in range(5):  # the best of five runs, against a noisy machine
-        start = time.perf_counter()
-        sequential = [run(p) for p in pairs]
-        t_seq = time.perf_counter() - start
-        start = time.perf_counter()
-        with ThreadPoolExecutor(2) as pool:
-            concurrent = list(pool.map(run, pairs))
-        t_par = time.perf_counter() - start
-        assert sequential == expected and concurrent == expected  # deterministic
-        best = min(best, t_par / t_seq)
-        if best < 0.8:
-            break
-    assert best < 0.8, f"two threads took {best:.2f} of the sequential time"
+    sequential = [run(p) for p in pairs]
+    with ThreadPoolExecutor(2) as pool:
+        assert list(pool.map(run, pairs)) == sequential
