@@ -425,6 +425,28 @@ void check_compressed_sizes(const PcdLayout& l, std::uintmax_t body,
   }
 }
 
+// A binary PCD holds POINTS records, then nothing but zeros (PCL's writer pads its files with up
+// to a page of zeros): other bytes after the records are points POINTS does not count.
+void check_binary_size(const PcdLayout& l, std::uintmax_t body,
+                       const std::filesystem::path& path) {
+  const std::uintmax_t records = l.points * point_bytes(l);
+  const auto fail = [&](const std::string& what) {
+    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
+                      " points of " + std::to_string(point_bytes(l)) + " bytes, but the file " +
+                      what + " (" + std::to_string(body) + " data bytes)");
+  };
+  if (records > body) fail("is too short to hold them");
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(l.header_bytes + records));
+  char chunk[4096];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+    const auto n = static_cast<std::size_t>(in.gcount());
+    if (std::any_of(chunk, chunk + n, [](char c) { return c != 0; })) {
+      fail("holds more data after them");
+    }
+  }
+}
+
 // PCL allocates the whole point array from the header's counts: refuse counts the file cannot
 // hold before anything is allocated (binary: exact size; binary_compressed: the sizes its data
 // claims; ASCII: at least two characters per value).
@@ -436,13 +458,7 @@ void validate_pcd_sizes(const PcdLayout& l, const std::filesystem::path& path) {
     throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
                       " points but the file is too short to hold them");
   }
-  if (l.data == "binary" && l.points * point_bytes(l) != body) {
-    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
-                      " points of " + std::to_string(point_bytes(l)) + " bytes, but the file " +
-                      (l.points * point_bytes(l) > body ? "is too short to hold them"
-                                                        : "holds more data after them") +
-                      " (" + std::to_string(body) + " data bytes)");
-  }
+  if (l.data == "binary") check_binary_size(l, body, path);
   if (l.data == "binary_compressed") check_compressed_sizes(l, body, path);
 }
 
