@@ -20,12 +20,13 @@ class CommaLocale {
     if (set()) return;
     const bool sources = std::filesystem::exists("/usr/share/i18n/locales/de_DE");
     if (!sources || std::system("command -v localedef > /dev/null 2>&1") != 0) {
-      skip_reason_ = "de_DE.UTF-8 is not installed and cannot be built (needs localedef and "
-                     "/usr/share/i18n/locales from the Debian package 'locales')";
+      skip_reason_ =
+          "de_DE.UTF-8 is not installed and cannot be built (needs localedef and "
+          "/usr/share/i18n/locales from the Debian package 'locales')";
       return;
     }
-    const std::string cmd = "localedef -i de_DE -f UTF-8 '" + (dir / "de_DE.UTF-8").string() +
-                            "' > /dev/null 2>&1";
+    const std::string cmd =
+        "localedef -i de_DE -f UTF-8 '" + (dir / "de_DE.UTF-8").string() + "' > /dev/null 2>&1";
     build_status_ = std::system(cmd.c_str());
     ::setenv("LOCPATH", dir.string().c_str(), 1);
     set_locpath_ = true;
@@ -62,8 +63,8 @@ class CommaLocale {
 
 /// In a test: sets the comma locale for the rest of the scope, skipping with the reason only
 /// when the machine cannot provide it (GTEST_SKIP), failing when it could but did not.
-#define QM3D_WITH_COMMA_LOCALE(guard, dir)                                                 \
-  ::qm3d::test::CommaLocale guard(dir);                                                    \
+#define QM3D_WITH_COMMA_LOCALE(guard, dir)                                                  \
+  ::qm3d::test::CommaLocale guard(dir);                                                     \
   if (!guard.active() && !guard.skip_reason().empty()) GTEST_SKIP() << guard.skip_reason(); \
-  ASSERT_TRUE(guard.active()) << "de_DE.UTF-8 could not be set (localedef status "        \
+  ASSERT_TRUE(guard.active()) << "de_DE.UTF-8 could not be set (localedef status "          \
                               << guard.build_status() << ")"

@@ -90,14 +90,21 @@ std::string integer_text(double v) {
 // The values an integer type holds.
 std::pair<double, double> integer_range(ScalarType t) {
   switch (t) {
-    case ScalarType::kInt8: return {-128.0, 127.0};
-    case ScalarType::kUint8: return {0.0, 255.0};
-    case ScalarType::kInt16: return {-32768.0, 32767.0};
-    case ScalarType::kUint16: return {0.0, 65535.0};
-    case ScalarType::kInt32: return {-2147483648.0, 2147483647.0};
-    case ScalarType::kUint32: return {0.0, 4294967295.0};
+    case ScalarType::kInt8:
+      return {-128.0, 127.0};
+    case ScalarType::kUint8:
+      return {0.0, 255.0};
+    case ScalarType::kInt16:
+      return {-32768.0, 32767.0};
+    case ScalarType::kUint16:
+      return {0.0, 65535.0};
+    case ScalarType::kInt32:
+      return {-2147483648.0, 2147483647.0};
+    case ScalarType::kUint32:
+      return {0.0, 4294967295.0};
     case ScalarType::kFloat32:
-    case ScalarType::kFloat64: break;
+    case ScalarType::kFloat64:
+      break;
   }
   return {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
 }
@@ -215,8 +222,10 @@ class Cursor {
                      bool list_length) {
     const auto [lo, hi] = integer_range(t);
     if (v >= lo && v <= hi && v == std::floor(v)) return;
-    const std::string what =
-        (list_length ? "list length of '" : p.is_list ? "item of '" : "property '") + p.name + "'";
+    const std::string what = (list_length ? "list length of '"
+                              : p.is_list ? "item of '"
+                                          : "property '") +
+                             p.name + "'";
     if (v != std::floor(v) || !std::isfinite(v)) {
       fail(name_, *where_ + " (line " + std::to_string(line_) + "): " + what + " '" +
                       std::string(token) + "' is not an integer (" + type_name(t) + ")");

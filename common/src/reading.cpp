@@ -53,9 +53,12 @@ ColourScale parse_colour_scale(const std::string& name) {
 
 const char* colour_scale_name(ColourScale scale) {
   switch (scale) {
-    case ColourScale::kAuto: return "auto";
-    case ColourScale::kUnit: return "unit";
-    case ColourScale::kByte: return "byte";
+    case ColourScale::kAuto:
+      return "auto";
+    case ColourScale::kUnit:
+      return "unit";
+    case ColourScale::kByte:
+      return "byte";
   }
   return "?";
 }
@@ -68,18 +71,21 @@ ColourConversion colour_conversion(const ColourValues& values, ColourScale scale
                                    const std::string& file) {
   ColourConversion out;
   switch (scale) {
-    case ColourScale::kByte: out.from_255 = true; return out;
+    case ColourScale::kByte:
+      out.from_255 = true;
+      return out;
     case ColourScale::kUnit:
       if (values.above_one > 0) {
         out.warning = file + ": " + count_text(values) + ": clamped to 1 (--colour-scale unit)";
       }
       return out;
-    case ColourScale::kAuto: break;
+    case ColourScale::kAuto:
+      break;
   }
   out.from_255 = values.above_one > 0;  // MEPP2's rule
-  const bool thin = static_cast<double>(values.above_one) <
-                        kFewAboveOne * static_cast<double>(values.count) ||
-                    values.max < kClearlyByte;
+  const bool thin =
+      static_cast<double>(values.above_one) < kFewAboveOne * static_cast<double>(values.count) ||
+      values.max < kClearlyByte;
   if (out.from_255 && thin) {
     out.warning = file + ": " + count_text(values) +
                   ": read as 0..255 like the reference; --colour-scale unit reads them as 0..1";

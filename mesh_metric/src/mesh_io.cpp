@@ -4,12 +4,12 @@
 #include <cmath>
 #include <optional>
 
+#include "halfedge_mesh.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
 #include "qm3d/common/reading.h"
 #include "qm3d/mesh/texture.h"
-#include "halfedge_mesh.h"
 #include "text_lines.h"
 
 namespace qm3d::mesh {
@@ -248,7 +248,8 @@ RawMesh parse_raw(const std::string& bytes, MeshFormat format, const std::string
   switch (format) {
     case MeshFormat::kObj: return parse_obj(bytes, name);
     case MeshFormat::kOff: return parse_off(bytes, name);
-    case MeshFormat::kPly: return from_ply(bytes, name, scale);
+    case MeshFormat::kPly:
+      return from_ply(bytes, name, scale);
   }
   fail(name, "unknown mesh format");
 }

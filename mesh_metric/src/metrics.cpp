@@ -57,7 +57,7 @@ ColoredCloud sample(const Input& input, const SurfaceSampling& s) {
 void register_metrics(Registry& registry) {
   registry.readers().mesh = read_mesh_data;
   registry.readers().mesh_vertices = [](const std::filesystem::path& path, FileFormat format,
-                                         const ReadOptions& options) {
+                                        const ReadOptions& options) {
     return read_mesh_vertices_data(path, mesh_format(format, path), options);
   };
   registry.set_sampler(sample);

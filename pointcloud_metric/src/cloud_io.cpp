@@ -1,5 +1,6 @@
 #include "qm3d/pointcloud/cloud_io.h"
 
+#include <locale.h>
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
@@ -11,10 +12,9 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
-#include <locale.h>
 #include <optional>
-#include <string>
 #include <sstream>
+#include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
@@ -224,7 +224,7 @@ std::uintmax_t field_count(const PcdLayout& l, std::size_t f) {
 struct PcdColumns {
   std::size_t field[4] = {0, 0, 0, 0};  // x, y, z, rgb (or rgba)
   std::size_t column[4] = {0, 0, 0, 0};
-  std::size_t columns = 0;              // values per ASCII line (a field of COUNT n takes n)
+  std::size_t columns = 0;  // values per ASCII line (a field of COUNT n takes n)
 };
 
 std::optional<std::size_t> layout_field(const PcdLayout& l, const std::string& name) {
@@ -345,8 +345,8 @@ void read_ascii_point(const PcdLine& line, const PcdLayout& l, const PcdColumns&
   for (std::size_t k = 0; k < line.size(); ++k) line.number<double>(k);  // every value a number
   for (int a = 0; a < 3; ++a) {
     const std::size_t column = c.column[a];
-    position[a] = l.sizes[c.field[a]] == 4 ? double(line.number<float>(column))
-                                           : line.number<double>(column);
+    position[a] =
+        l.sizes[c.field[a]] == 4 ? double(line.number<float>(column)) : line.number<double>(column);
   }
   colour = ascii_packed_colour(line, c.column[3], l.types[c.field[3]]);
 }
@@ -361,7 +361,7 @@ ColoredCloud read_ascii_pcd(const PcdLayout& l, const PcdColumns& c,
   out.positions.resize(l.points);
   out.colors.resize(l.points);
   std::size_t n = 0, line_no = 1 + static_cast<std::size_t>(std::count(
-                                        bytes.begin(), bytes.begin() + l.header_bytes, '\n'));
+                                       bytes.begin(), bytes.begin() + l.header_bytes, '\n'));
   for (std::size_t pos = l.header_bytes; pos < bytes.size(); ++line_no) {
     const std::size_t end = std::min(bytes.find('\n', pos), bytes.size());
     const std::string_view text(bytes.data() + pos, end - pos);
@@ -427,8 +427,7 @@ void check_compressed_sizes(const PcdLayout& l, std::uintmax_t body,
 
 // A binary PCD holds POINTS records, then nothing but zeros (PCL's writer pads its files with up
 // to a page of zeros): other bytes after the records are points POINTS does not count.
-void check_binary_size(const PcdLayout& l, std::uintmax_t body,
-                       const std::filesystem::path& path) {
+void check_binary_size(const PcdLayout& l, std::uintmax_t body, const std::filesystem::path& path) {
   const std::uintmax_t records = l.points * point_bytes(l);
   const auto fail = [&](const std::string& what) {
     throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +

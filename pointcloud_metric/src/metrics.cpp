@@ -7,7 +7,7 @@ namespace qm3d::pointcloud {
 
 void register_metrics(Registry& registry) {
   registry.readers().cloud = [](const std::filesystem::path& path, FileFormat format,
-                                 const ReadOptions& options) {
+                                const ReadOptions& options) {
     if (format != FileFormat::kPly && format != FileFormat::kPcd) {
       throw FormatError(path.string() + ": not a PLY or PCD point cloud");
     }

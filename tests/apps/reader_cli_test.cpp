@@ -61,7 +61,8 @@ void write_float_colour_cloud(const fs::path& out, const std::string& odd = "") 
 TEST_F(ReaderCli, OneFloatColourAboveOneIsAWarningAndColourScaleUnitReadsItAs0To1) {
   write_float_colour_cloud(dir_ / "ref.ply");
   write_float_colour_cloud(dir_ / "odd.ply", "1.0000001");
-  const test::CliRun automatic = qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") + "' --csv");
+  const test::CliRun automatic =
+      qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") + "' --csv");
   ASSERT_EQ(automatic.code, 0) << automatic.err;
   EXPECT_NE(automatic.err.find("qm3d: warning: " + path("odd.ply") +
                                ": 1 of 6000 colour values above 1 (max 1.0000001192092896): "
@@ -69,8 +70,8 @@ TEST_F(ReaderCli, OneFloatColourAboveOneIsAWarningAndColourScaleUnitReadsItAs0To
                                "them as 0..1"),
             std::string::npos)
       << automatic.err;
-  const test::CliRun unit = qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") +
-                                 "' --colour-scale unit --json");
+  const test::CliRun unit =
+      qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") + "' --colour-scale unit --json");
   ASSERT_EQ(unit.code, 0) << unit.err;
   EXPECT_NE(unit.err.find("clamped to 1 (--colour-scale unit)"), std::string::npos) << unit.err;
   EXPECT_NE(unit.out.find("clamped to 1 (--colour-scale unit)"), std::string::npos)
@@ -78,8 +79,8 @@ TEST_F(ReaderCli, OneFloatColourAboveOneIsAWarningAndColourScaleUnitReadsItAs0To
   const double score_unit = std::stod(unit.out.substr(unit.out.find("\"score\":") + 8));
   EXPECT_LT(score_unit, 1e-3) << "one value clamped from 1.0000001 to 1 changes almost nothing";
 
-  const test::CliRun bad = qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") +
-                                "' --colour-scale percent");
+  const test::CliRun bad =
+      qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") + "' --colour-scale percent");
   EXPECT_EQ(bad.code, 1) << bad.err;
   EXPECT_NE(bad.err.find("--colour-scale"), std::string::npos) << bad.err;
 }
@@ -94,7 +95,8 @@ TEST_F(ReaderCli, ObjColourScaleOptionAppliesToMeshMetrics) {
       << (i == 0 ? std::string("1.0000001") : std::to_string(m.mesh.colors[i].r)) << ' '
       << m.mesh.colors[i].g << ' ' << m.mesh.colors[i].b << '\n';
   }
-  for (const auto& t : m.mesh.triangles) o << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  for (const auto& t : m.mesh.triangles)
+    o << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
   o.close();
   const std::string pair = " '" + path("ref.obj") + "' '" + path("ref.obj") + "'";
   const test::CliRun automatic = qm3d("cmdm" + pair);

@@ -10,8 +10,8 @@
 #include <iterator>
 #include <sstream>
 
-#include "qm3d/common/error.h"
 #include "comma_locale.h"
+#include "qm3d/common/error.h"
 
 namespace qm3d::ply {
 namespace {
@@ -201,8 +201,9 @@ TEST(Ply, MalformedInputsAreNamedErrors) {
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n3 0 1 22222222222222222222222222222222222\n";
-  EXPECT_NE(error_of(huge_index).find("face 0 (line 13): item of 'vertex_indices' "
-                                      "22222222222222222222222222222222222 is out of range for int"),
+  EXPECT_NE(error_of(huge_index)
+                .find("face 0 (line 13): item of 'vertex_indices' "
+                      "22222222222222222222222222222222222 is out of range for int"),
             std::string::npos)
       << error_of(huge_index);
 
@@ -259,13 +260,14 @@ TEST(Ply, WriterRoundTripsThroughTheReader) {
   std::filesystem::remove_all(dir);
 }
 
-// A two-vertex ASCII PLY whose second vertex (line 12, 13 with 'q') is `0 0 0 VALUE 0 0`, the colours of
-// type `type`, or `0 0 0 1 2 3 VALUE` with VALUE an extra property 'q' of type `type`.
+// A two-vertex ASCII PLY whose second vertex (line 12, 13 with 'q') is `0 0 0 VALUE 0 0`, the
+// colours of type `type`, or `0 0 0 1 2 3 VALUE` with VALUE an extra property 'q' of type `type`.
 std::string ascii_value(const std::string& type, const std::string& value, bool as_colour) {
   const std::string colour_type = as_colour ? type : "uchar";
-  std::string h = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                  "property float z\nproperty " + colour_type + " red\nproperty " + colour_type +
-                  " green\nproperty " + colour_type + " blue\n";
+  std::string h =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nproperty " +
+      colour_type + " red\nproperty " + colour_type + " green\nproperty " + colour_type + " blue\n";
   if (!as_colour) h += "property " + type + " q\n";
   h += "end_header\n";
   return as_colour ? h + "0 0 0 1 2 3\n0 0 0 " + value + " 0 0\n"
@@ -275,9 +277,9 @@ std::string ascii_value(const std::string& type, const std::string& value, bool 
 // Issue 24: `uchar 300`, `-1`, `ushort 70000` were accepted (300 became a colour of 1.18).
 TEST(PlyHostile, AsciiIntegersOutsideTheirDeclaredTypeAreErrors) {
   const std::pair<const char*, const char*> bad[] = {
-      {"uchar", "300"},    {"uchar", "-1"},        {"uchar", "256"},       {"ushort", "70000"},
-      {"ushort", "-1"},    {"char", "128"},        {"char", "-129"},       {"short", "32768"},
-      {"short", "-32769"}, {"int", "2147483648"},  {"uint", "4294967296"}, {"uint", "-1"}};
+      {"uchar", "300"},    {"uchar", "-1"},       {"uchar", "256"},       {"ushort", "70000"},
+      {"ushort", "-1"},    {"char", "128"},       {"char", "-129"},       {"short", "32768"},
+      {"short", "-32769"}, {"int", "2147483648"}, {"uint", "4294967296"}, {"uint", "-1"}};
   for (const auto& [type, value] : bad) {
     for (const bool as_colour : {true, false}) {
       const std::string t = type;
@@ -295,7 +297,8 @@ TEST(PlyHostile, AsciiIntegersOutsideTheirDeclaredTypeAreErrors) {
   EXPECT_EQ(error_of(ascii_value("uchar", "255", true)), "");
   EXPECT_EQ(error_of(ascii_value("ushort", "65535", true)), "");
   for (const auto& [type, value] : {std::pair<const char*, const char*>{"char", "-128"},
-                                    {"short", "-32768"}, {"int", "-2147483648"},
+                                    {"short", "-32768"},
+                                    {"int", "-2147483648"},
                                     {"uint", "4294967295"}}) {
     EXPECT_EQ(error_of(ascii_value(type, value, false)), "") << type;
   }
@@ -343,8 +346,8 @@ TEST(PlyHostile, FloatColourScaleIsReportedWhenFewValuesDecideAndCanBeChosen) {
   ASSERT_EQ(unit.warnings.size(), 1u);
   EXPECT_NE(unit.warnings[0].find("clamped to 1"), std::string::npos);
 
-  const Content byte = parse(float_colours(0.5).bytes(), "t.ply", AsciiFloat::kDouble,
-                             ColourScale::kByte);
+  const Content byte =
+      parse(float_colours(0.5).bytes(), "t.ply", AsciiFloat::kDouble, ColourScale::kByte);
   EXPECT_EQ(byte.colors[0].b, 1 / 255.0);
   EXPECT_TRUE(byte.warnings.empty());
 }
@@ -372,7 +375,8 @@ Builder far_cloud(const std::string& pos_type, Format format, double offset) {
 // Issue 24: coordinates declared float at an offset of 1e7 lose their detail (the float32 step
 // there is 1, the points are 0.1 apart) without a word.
 TEST(PlyHostile, Float32RoundingLargeAgainstTheSpacingIsAWarning) {
-  const Content binary = parse(far_cloud("float", Format::kBinaryLittleEndian, 1e7).bytes(), "t.ply");
+  const Content binary =
+      parse(far_cloud("float", Format::kBinaryLittleEndian, 1e7).bytes(), "t.ply");
   ASSERT_EQ(binary.warnings.size(), 1u);
   EXPECT_NE(binary.warnings[0].find("t.ply: coordinates stored as float32: at |coordinate| "
                                     "10000001 the float32 step is 1, more than 1/8 of the "

@@ -137,9 +137,10 @@ TEST_F(MeshFiles, ObjVertexValueCountsOtherThan3_4_6AreErrors) {
   EXPECT_TRUE(four.mesh.colors.empty());
   const std::pair<const char*, const char*> bad[] = {
       {"v 0 0 0 1 0.5\n", "line 1: a vertex with 5 values"},
-      {"v 0 0 0 1 0.5 0.5 0.5\n", "line 1: a vertex with 7 values (qm3d reads 'v x y z', "
-                                  "'v x y z w' and 'v x y z r g b'; 7 values could be x y z w r "
-                                  "g b or x y z r g b a)"},
+      {"v 0 0 0 1 0.5 0.5 0.5\n",
+       "line 1: a vertex with 7 values (qm3d reads 'v x y z', "
+       "'v x y z w' and 'v x y z r g b'; 7 values could be x y z w r "
+       "g b or x y z r g b a)"},
       {"v 0 0 0 1 0.5 0.5 0.5 1\n", "line 1: a vertex with 8 or more values"},
       {"v 0 0 0 1 0.5 0.5 0.5 1 2 3\n", "line 1: a vertex with 8 or more values"}};
   for (const auto& [line, message] : bad) {
@@ -155,8 +156,8 @@ std::string colour_obj(const std::string& odd) {
             (i == 5 ? odd : std::string("0.25")) + " 1\n";
   }
   for (int i = 1; i + 2 <= 100; ++i) {
-    text += "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) +
-            "\n";
+    text +=
+        "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
   }
   return text;
 }
@@ -167,9 +168,10 @@ TEST_F(MeshFiles, ObjAndOffColourScaleIsReportedAndCanBeChosen) {
   const MeshFile automatic = read_mesh(obj);
   EXPECT_EQ(automatic.mesh.colors[0].r, double(float(1 / 255.0)));  // MEPP2's rule by default
   ASSERT_EQ(automatic.warnings.size(), 1u);
-  EXPECT_EQ(automatic.warnings[0], obj.string() + ": 1 of 300 colour values above 1 (max "
-                                   "1.0000001): read as 0..255 like the reference; "
-                                   "--colour-scale unit reads them as 0..1");
+  EXPECT_EQ(automatic.warnings[0], obj.string() +
+                                       ": 1 of 300 colour values above 1 (max "
+                                       "1.0000001): read as 0..255 like the reference; "
+                                       "--colour-scale unit reads them as 0..1");
   MeshReadOptions unit;
   unit.colour_scale = ColourScale::kUnit;
   const MeshFile chosen = read_mesh(obj, unit);
@@ -184,9 +186,9 @@ TEST_F(MeshFiles, ObjAndOffColourScaleIsReportedAndCanBeChosen) {
   EXPECT_NE(vertices.warnings[0].find("clamped to 1 (--colour-scale unit)"), std::string::npos);
   // A clear 0..1 file, and a COFF in 0..255, need no word.
   EXPECT_TRUE(read_mesh(write("u.obj", colour_obj("0.75"))).warnings.empty());
-  const MeshFile off =
-      read_mesh(write("c.off", "COFF\n3 1 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n"
-                               "3 0 1 2\n"));
+  const MeshFile off = read_mesh(write("c.off",
+                                       "COFF\n3 1 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n"
+                                       "3 0 1 2\n"));
   EXPECT_TRUE(off.warnings.empty());
   EXPECT_EQ(off.mesh.colors[1].g, 1.0);
 }

@@ -312,8 +312,10 @@ std::string pcd_header(const std::string& fields, const std::string& size, const
                        const std::string& count, std::size_t points,
                        const std::string& data = "ascii") {
   return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + size + "\nTYPE " + type +
-         "\nCOUNT " + count + "\nWIDTH " + std::to_string(points) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 "
-         "0 0\nPOINTS " + std::to_string(points) + "\nDATA " + data + "\n";
+         "\nCOUNT " + count + "\nWIDTH " + std::to_string(points) +
+         "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 "
+         "0 0\nPOINTS " +
+         std::to_string(points) + "\nDATA " + data + "\n";
 }
 
 std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
@@ -345,8 +347,10 @@ TEST(ReadCloudHostile, AsciiPcdPointsDisagreeingWithTheDataAreErrors) {
   expect_error_mentioning<FormatError>(write_file(dir / "fewer.pcd", kXyzRgb + line + "\n\n"),
                                        "PCD data ends after 1 of the 2 points");
   // Blank lines and CRLF line ends are no points.
-  const ColoredCloud c = read_cloud(write_file(dir / "crlf.pcd", kXyzRgb + "\n0.5 1.5 2.5 "
-                                                                 "13132850\r\n\n" + line));
+  const ColoredCloud c = read_cloud(write_file(dir / "crlf.pcd", kXyzRgb +
+                                                                     "\n0.5 1.5 2.5 "
+                                                                     "13132850\r\n\n" +
+                                                                     line));
   ASSERT_EQ(c.size(), 2u);
   EXPECT_EQ(c.positions[1], (Vec3{0.5, 1.5, 2.5}));
   EXPECT_EQ(c.colors[1].r, 200 / 255.0);
@@ -444,16 +448,18 @@ TEST(ReadCloudHostile, FloatCoordinatesFarFromTheOriginAreAWarning) {
                                "the float32 step is 1"),
             std::string::npos)
       << d.warnings[0];
-  EXPECT_TRUE(read_cloud_data(write_file(dir / "near.pcd", near), CloudFormat::kPcd).warnings.empty());
+  EXPECT_TRUE(
+      read_cloud_data(write_file(dir / "near.pcd", near), CloudFormat::kPcd).warnings.empty());
   EXPECT_TRUE(read_cloud_data(write_file(dir / "double.pcd", as_double), CloudFormat::kPcd)
                   .warnings.empty());
 }
 
 TEST(ReadCloudHostile, PlyFloatColourScaleIsAnOptionWithAWarning) {
   const auto dir = temp_dir("ply_scale");
-  std::string text = "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float "
-                     "y\nproperty float z\nproperty float red\nproperty float green\nproperty float "
-                     "blue\nend_header\n";
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float "
+      "y\nproperty float z\nproperty float red\nproperty float green\nproperty float "
+      "blue\nend_header\n";
   for (int i = 0; i < 100; ++i) {
     text += std::to_string(i) + " " + std::to_string(i % 3) + " 0 0.5 " +
             (i == 7 ? "1.0000001" : "0.25") + " 1\n";
@@ -463,9 +469,10 @@ TEST(ReadCloudHostile, PlyFloatColourScaleIsAnOptionWithAWarning) {
   EXPECT_EQ(automatic.cloud.colors[0].r, 1 / 255.0);  // the reference's rule
   ASSERT_EQ(automatic.warnings.size(), 1u);
   // (1.0000001 as float32: clouds read ASCII `float` values as the reference does)
-  EXPECT_EQ(automatic.warnings[0], path.string() + ": 1 of 300 colour values above 1 (max "
-                                   "1.0000001192092896): read as 0..255 like the reference; "
-                                   "--colour-scale unit reads them as 0..1");
+  EXPECT_EQ(automatic.warnings[0], path.string() +
+                                       ": 1 of 300 colour values above 1 (max "
+                                       "1.0000001192092896): read as 0..255 like the reference; "
+                                       "--colour-scale unit reads them as 0..1");
   ReadOptions unit;
   unit.colour_scale = ColourScale::kUnit;
   const CloudData chosen = read_cloud_data(path, CloudFormat::kPly, unit);

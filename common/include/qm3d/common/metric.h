@@ -104,7 +104,8 @@ struct Readers {
   /// A mesh file (OBJ, OFF, PLY) of the given format; colours kept when present.
   std::function<MeshData(const std::filesystem::path&, FileFormat, const ReadOptions&)> mesh;
   /// Every vertex of a mesh file (OBJ, OFF) as a cloud.
-  std::function<CloudData(const std::filesystem::path&, FileFormat, const ReadOptions&)> mesh_vertices;
+  std::function<CloudData(const std::filesystem::path&, FileFormat, const ReadOptions&)>
+      mesh_vertices;
   /// A cloud file (PLY, PCD); a PLY mesh gives its vertices.
   std::function<CloudData(const std::filesystem::path&, FileFormat, const ReadOptions&)> cloud;
 };
