@@ -113,6 +113,7 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
 // their variables, and a value given to one command must not be read through another's option).
 struct ScoreCli {
   std::string ref, dist;
+  std::string colour_scale = "auto";
   bool progress = false;
   RunCli run;
   MetricOptionsCli options;
@@ -138,7 +139,8 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   std::optional<ReportSettings> report;  // resolved first: a missing three.js fails fast
   if (!cli.report.file.empty()) report = report_settings(cli.report);
   request.keep_per_element = report.has_value();
-  const Input ref = registry().read(cli.ref), dist = registry().read(cli.dist);
+  const ReadOptions read = read_options(cli.colour_scale);
+  const Input ref = registry().read(cli.ref, read), dist = registry().read(cli.dist, read);
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
   std::vector<MetricResult> results;
   const bool show = !g.quiet && (cli.progress || stderr_is_terminal());
@@ -194,6 +196,7 @@ int run(int argc, char** argv) {
     c.cmd->add_option("REF", cli.ref, "Reference")->required();
     c.cmd->add_option("DIST", cli.dist, "Distorted")->required();
     add_run_options(c.cmd, cli.run, c.spec);
+    add_read_options(c.cmd, cli.colour_scale);
     add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
                        cli.options);
     if (!c.report) add_output_options(c.cmd, cli.out, c.spec && c.spec->per_element_on_input);

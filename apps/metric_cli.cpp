@@ -160,6 +160,21 @@ void add_run_options(CLI::App* cmd, RunCli& r, const MetricSpec* spec) {
   if (weights) model->excludes(weights);
 }
 
+void add_read_options(CLI::App* cmd, std::string& colour_scale) {
+  cmd->add_option("--colour-scale", colour_scale,
+                  "Scale of colours stored as numbers (OBJ, OFF, PLY float): auto = the "
+                  "reference's rule (0..255 when any value is above 1, else 0..1; warns when few "
+                  "values decide), unit = 0..1 (values above 1 clamped), byte = 0..255")
+      ->check(CLI::IsMember({"auto", "unit", "byte"}))
+      ->capture_default_str();
+}
+
+ReadOptions read_options(const std::string& colour_scale) {
+  ReadOptions o;
+  o.colour_scale = parse_colour_scale(colour_scale);
+  return o;
+}
+
 ScoreRequest score_request(const RunCli& r, const MetricSpec* spec, int threads,
                            const std::string& data_dir) {
   ScoreRequest req;

@@ -44,6 +44,12 @@ OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
 /// and batch, `spec` null: --model, applied to the metric the file names).
 void add_run_options(CLI::App* cmd, RunCli& r, const MetricSpec* spec);
 
+/// Adds --colour-scale (auto, unit or byte: the scale of colours stored as numbers, reading.h).
+void add_read_options(CLI::App* cmd, std::string& colour_scale);
+
+/// The read options of --colour-scale's value.
+ReadOptions read_options(const std::string& colour_scale);
+
 /// The request of a metric command (`spec` set) or of compare / batch (`spec` null).
 ScoreRequest score_request(const RunCli& r, const MetricSpec* spec, int threads,
                            const std::string& data_dir);

@@ -22,6 +22,7 @@ PACKAGES=(
   python3 python3-numpy time
   pybind11-dev python3-dev python3-pytest python3-pandas python3-open3d python3-distributed
   gnuplot-nox
+  locales
   slurm-wlm munge
   chromium libjs-three
 )

@@ -142,18 +142,21 @@ struct Input::State {
   FileFormat format = FileFormat::kPly;
   Kind kind = Kind::kCloud;
   Readers readers;
+  ReadOptions read_options;
   std::mutex mutex;
   std::optional<MeshData> mesh;
-  std::optional<ColoredCloud> cloud;
+  std::optional<CloudData> cloud;
 };
 
-Input Input::from_file(const std::filesystem::path& path, const Registry& registry) {
+Input Input::from_file(const std::filesystem::path& path, const Registry& registry,
+                       const ReadOptions& options) {
   Input in;
   in.state_ = std::make_shared<State>();
   State& s = *in.state_;
   s.name = path.string();
   s.path = path;
   s.readers = registry.readers();
+  s.read_options = options;
   const std::string head = head_of(path);
   s.format = format_of_file(head, path);
   switch (s.format) {
@@ -197,7 +200,7 @@ Input Input::from_cloud(ColoredCloud cloud, std::string name) {
   in.state_ = std::make_shared<State>();
   in.state_->name = std::move(name);
   in.state_->kind = Kind::kCloud;
-  in.state_->cloud = std::move(cloud);
+  in.state_->cloud = CloudData{std::move(cloud), {}};
   return in;
 }
 
@@ -215,24 +218,30 @@ const MeshData& Input::mesh() const {
     throw FormatError(s.name + ": a point cloud (no faces), not a mesh; score it with PCQM");
   }
   if (!s.readers.mesh) throw std::logic_error("no mesh reader registered");
-  s.mesh = s.readers.mesh(s.path, s.format);
+  s.mesh = s.readers.mesh(s.path, s.format, s.read_options);
   return *s.mesh;
 }
 
 const ColoredCloud& Input::cloud() const {
   State& s = *state_;
   std::lock_guard<std::mutex> lock(s.mutex);
-  if (s.cloud) return *s.cloud;
+  if (s.cloud) return s.cloud->cloud;
   if (s.path.empty()) {  // a mesh in memory: its vertices
-    s.cloud = vertex_cloud(s.mesh->mesh);
-    if (!s.mesh->has_colors) s.cloud->colors.clear();
-    return *s.cloud;
+    s.cloud = CloudData{vertex_cloud(s.mesh->mesh), {}};
+    if (!s.mesh->has_colors) s.cloud->cloud.colors.clear();
+    return s.cloud->cloud;
   }
   const bool mesh_format = s.format == FileFormat::kObj || s.format == FileFormat::kOff;
   const auto& read = mesh_format ? s.readers.mesh_vertices : s.readers.cloud;
   if (!read) throw std::logic_error("no cloud reader registered");
-  s.cloud = read(s.path, s.format);
-  return *s.cloud;
+  s.cloud = read(s.path, s.format, s.read_options);
+  return s.cloud->cloud;
+}
+
+std::vector<std::string> Input::cloud_warnings() const {
+  cloud();
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  return state_->cloud->warnings;
 }
 
 void Input::load(Kind as) const {
@@ -392,6 +401,19 @@ OptionValues options_for(const MetricSpec& spec, const OptionValues& all) {
   return out;
 }
 
+namespace {
+
+// Both inputs' cloud reader warnings, each line once (the same file may be both).
+std::vector<std::string> cloud_reader_warnings(const Input& reference, const Input& distorted) {
+  std::vector<std::string> all = reference.cloud_warnings();
+  for (std::string& w : distorted.cloud_warnings()) {
+    if (std::find(all.begin(), all.end(), w) == all.end()) all.push_back(std::move(w));
+  }
+  return all;
+}
+
+}  // namespace
+
 MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
                         const RunOptions& run, const OptionValues& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -404,6 +426,10 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
                              [&] { reference.load(spec.reads); });
   distorted.load(spec.reads);
   ref_task.get();
+  // Taken now: the metric may release the inputs (RunOptions::inputs_done).
+  const std::vector<std::string> reading = spec.reads == Input::Kind::kCloud
+                                               ? cloud_reader_warnings(reference, distorted)
+                                               : std::vector<std::string>();
   MetricResult result;
   try {
     result = spec.run(spec, reference, distorted, run, values);
@@ -411,6 +437,7 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
     throw NumericError(e.what() + std::string(" (reference ") + reference.name() +
                        ", distorted " + distorted.name() + ")");
   }
+  result.warnings.insert(result.warnings.begin(), reading.begin(), reading.end());
   result.provenance.version = kVersion;
   result.provenance.reference = reference.name();
   result.provenance.distorted = distorted.name();

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <locale>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -78,6 +79,36 @@ const char* type_name(ScalarType t) {
   return "?";
 }
 
+// An integral value read from the file, written in full: an ASCII file can hold any number of
+// digits, which no integer type holds.
+std::string integer_text(double v) {
+  char text[400];  // enough for every finite double with %.0f
+  std::snprintf(text, sizeof text, "%.0f", v);
+  return text;
+}
+
+// The values an integer type holds.
+std::pair<double, double> integer_range(ScalarType t) {
+  switch (t) {
+    case ScalarType::kInt8:
+      return {-128.0, 127.0};
+    case ScalarType::kUint8:
+      return {0.0, 255.0};
+    case ScalarType::kInt16:
+      return {-32768.0, 32767.0};
+    case ScalarType::kUint16:
+      return {0.0, 65535.0};
+    case ScalarType::kInt32:
+      return {-2147483648.0, 2147483647.0};
+    case ScalarType::kUint32:
+      return {0.0, 4294967295.0};
+    case ScalarType::kFloat32:
+    case ScalarType::kFloat64:
+      break;
+  }
+  return {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+}
+
 std::vector<std::string> split_words(const std::string& line) {
   std::istringstream in(line);
   std::vector<std::string> words;
@@ -116,7 +147,8 @@ class Cursor {
         pos_(offset),
         format_(format),
         float32_(ascii_float == AsciiFloat::kAsDeclared),
-        name_(name) {}
+        name_(name),
+        line_(1 + static_cast<std::size_t>(std::count(data_, data_ + offset, '\n'))) {}
 
   void begin_record(const std::string& where) {
     where_ = &where;
@@ -124,6 +156,7 @@ class Cursor {
     // Skip blank lines, then delimit the record's line.
     while (pos_ < size_ && (data_[pos_] == '\n' || data_[pos_] == '\r' || data_[pos_] == ' ' ||
                             data_[pos_] == '\t')) {
+      if (data_[pos_] == '\n') ++line_;
       ++pos_;
     }
     if (pos_ >= size_) fail(name_, "file ends before " + where);
@@ -138,9 +171,14 @@ class Cursor {
     pos_ = line_end_;
   }
 
-  double value(ScalarType t) {
-    return format_ == Format::kAscii ? ascii_value(t) : binary_value(t);
+  /// The next value of property `p`: one of its items, or the length of its list.
+  double value(const Property& p, bool list_length = false) {
+    const ScalarType t = list_length ? p.count_type : p.type;
+    return format_ == Format::kAscii ? ascii_value(t, p, list_length) : binary_value(t);
   }
+
+  /// Whether ASCII `float` values are rounded to float32 (binary ones always are).
+  bool rounds_float32() const { return format_ != Format::kAscii || float32_; }
 
   /// True when nothing but whitespace follows the current position.
   bool at_end() const {
@@ -158,24 +196,45 @@ class Cursor {
     }
   }
 
-  double ascii_value(ScalarType t) {
+  double ascii_value(ScalarType t, const Property& p, bool list_length) {
     skip_spaces();
     if (pos_ >= line_end_) fail(name_, *where_ + " has fewer values than the header declares");
     std::size_t end = pos_;
     while (end < line_end_ && data_[end] != ' ' && data_[end] != '\t' && data_[end] != '\r') ++end;
-    token_.assign(data_ + pos_, end - pos_);
-    char* stop = nullptr;
-    const double v = float32_ && t == ScalarType::kFloat32
-                         ? static_cast<double>(std::strtof(token_.c_str(), &stop))
-                         : std::strtod(token_.c_str(), &stop);
-    if (stop != token_.c_str() + token_.size() || token_.empty()) {
-      fail(name_, *where_ + ": '" + token_ + "' is not a number");
+    const std::string_view token(data_ + pos_, end - pos_);
+    double v = 0;
+    bool ok = false;
+    if (float32_ && t == ScalarType::kFloat32) {
+      float f = 0;
+      ok = parse_number(token, f);
+      v = f;
+    } else {
+      ok = parse_number(token, v);
     }
-    if (is_integer_type(t) && (v != std::floor(v) || !std::isfinite(v))) {
-      fail(name_, *where_ + ": '" + token_ + "' is not an integer (" + type_name(t) + ")");
-    }
+    if (!ok) fail(name_, *where_ + ": '" + std::string(token) + "' is not a number");
+    if (is_integer_type(t)) check_integer(v, t, token, p, list_length);
     pos_ = end;
     return v;
+  }
+
+  // An ASCII integer must be one the declared type holds ("uchar 300" is no colour of 1.18).
+  void check_integer(double v, ScalarType t, std::string_view token, const Property& p,
+                     bool list_length) {
+    const auto [lo, hi] = integer_range(t);
+    if (v >= lo && v <= hi && v == std::floor(v)) return;
+    const std::string what = (list_length ? "list length of '"
+                              : p.is_list ? "item of '"
+                                          : "property '") +
+                             p.name + "'";
+    if (v != std::floor(v) || !std::isfinite(v)) {
+      fail(name_, *where_ + " (line " + std::to_string(line_) + "): " + what + " '" +
+                      std::string(token) + "' is not an integer (" + type_name(t) + ")");
+    }
+    if (v < lo || v > hi) {
+      fail(name_, *where_ + " (line " + std::to_string(line_) + "): " + what + " " +
+                      std::string(token) + " is out of range for " + type_name(t) + " (" +
+                      integer_text(lo) + ".." + integer_text(hi) + ")");
+    }
   }
 
   template <typename T>
@@ -221,7 +280,7 @@ class Cursor {
   bool float32_;  // ASCII `float` values parsed as float32
   const std::string& name_;
   const std::string* where_ = nullptr;
-  std::string token_;
+  std::size_t line_;  // line number of pos_ (ASCII)
 };
 
 struct VertexLayout {
@@ -293,12 +352,12 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
     for (std::size_t k = 0; k < e.properties.size(); ++k) {
       const Property& p = e.properties[k];
       if (p.is_list) {
-        const double n = cur.value(p.count_type);
+        const double n = cur.value(p, true);
         if (n < 0) fail(name, where + ": negative list length");
-        for (double j = 0; j < n; ++j) cur.value(p.type);
+        for (double j = 0; j < n; ++j) cur.value(p);
         values[k] = 0;
       } else {
-        values[k] = cur.value(p.type);
+        values[k] = cur.value(p);
       }
     }
     cur.end_record();
@@ -312,29 +371,30 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
   }
 }
 
-void normalise_colors(Content& c, const std::string& name) {
-  double scale = 1.0;
-  bool round_255 = false;
-  if (c.color_encoding == ColorEncoding::kUint8) scale = 255.0;
-  if (c.color_encoding == ColorEncoding::kUint16) scale = 65535.0;
-  if (c.color_encoding == ColorEncoding::kFloat) {
-    double max_value = 0;
-    for (std::size_t i = 0; i < c.colors.size(); ++i) {
-      for (double v : {c.colors[i].r, c.colors[i].g, c.colors[i].b}) {
-        if (!(v >= 0.0) || v > 255.5) {
-          fail(name, "vertex " + std::to_string(i) + " has colour value " + std::to_string(v) +
-                         " outside [0, 1] and [0, 255]");
-        }
-        max_value = std::max(max_value, v);
-      }
+// Integer colours use their type's range; float colours the ColourScale (reading.h).
+void normalise_colors(Content& c, const std::string& name, ColourScale colour_scale) {
+  if (c.color_encoding == ColorEncoding::kUint8 || c.color_encoding == ColorEncoding::kUint16) {
+    const double scale = c.color_encoding == ColorEncoding::kUint8 ? 255.0 : 65535.0;
+    for (Rgb& rgb : c.colors) {
+      for (double* v : {&rgb.r, &rgb.g, &rgb.b}) *v /= scale;
     }
-    // Float colours are 0..1; a file with any value above 1 is read as 0..255 (MEPP2's rule).
-    round_255 = max_value > 1.0;
+    return;
   }
-  for (Rgb& rgb : c.colors) {
-    for (double* v : {&rgb.r, &rgb.g, &rgb.b}) {
-      *v = round_255 ? std::floor(*v + 0.5) / 255.0 : *v / scale;
+  if (c.color_encoding != ColorEncoding::kFloat) return;
+  ColourValues values;
+  for (std::size_t i = 0; i < c.colors.size(); ++i) {
+    for (double v : {c.colors[i].r, c.colors[i].g, c.colors[i].b}) {
+      if (!(v >= 0.0) || v > 255.5) {
+        fail(name, "vertex " + std::to_string(i) + " has colour value " + number_text(v) +
+                       " outside [0, 1] and [0, 255]");
+      }
+      values.add(v);
     }
+  }
+  const ColourConversion convert = colour_conversion(values, colour_scale, name);
+  if (convert.warning) c.warnings.push_back(*convert.warning);
+  for (Rgb& rgb : c.colors) {
+    for (double* v : {&rgb.r, &rgb.g, &rgb.b}) *v = convert(*v);
   }
 }
 
@@ -346,14 +406,6 @@ int face_list_property(const Element& e) {
     }
   }
   return -1;
-}
-
-// An integral value read from the file, written in full: an ASCII file can hold any number of
-// digits, which no integer type holds.
-std::string integer_text(double v) {
-  char text[400];  // enough for every finite double with %.0f
-  std::snprintf(text, sizeof text, "%.0f", v);
-  return text;
 }
 
 void read_faces(Cursor& cur, const Element& e, const std::string& name, Content& out) {
@@ -368,13 +420,13 @@ void read_faces(Cursor& cur, const Element& e, const std::string& name, Content&
     for (std::size_t k = 0; k < e.properties.size(); ++k) {
       const Property& p = e.properties[k];
       if (!p.is_list) {
-        cur.value(p.type);
+        cur.value(p);
         continue;
       }
-      const double n = cur.value(p.count_type);
+      const double n = cur.value(p, true);
       if (n < 0) fail(name, where + ": negative list length");
       for (double j = 0; j < n; ++j) {
-        const double idx = cur.value(p.type);
+        const double idx = cur.value(p);
         if (static_cast<int>(k) != list) continue;
         if (idx < 0 || idx >= num_vertices) {
           fail(name, where + " refers to vertex " + integer_text(idx) +
@@ -398,11 +450,11 @@ void skip_element(Cursor& cur, const Element& e, const std::string& name) {
     cur.begin_record(where);
     for (const auto& p : e.properties) {
       if (p.is_list) {
-        const double n = cur.value(p.count_type);
+        const double n = cur.value(p, true);
         if (n < 0) fail(name, where + ": negative list length");
-        for (double j = 0; j < n; ++j) cur.value(p.type);
+        for (double j = 0; j < n; ++j) cur.value(p);
       } else {
-        cur.value(p.type);
+        cur.value(p);
       }
     }
     cur.end_record();
@@ -480,7 +532,20 @@ Header parse_header(const std::string& bytes, const std::string& name,
   return h;
 }
 
-Content parse(const std::string& bytes, const std::string& name, AsciiFloat ascii_float) {
+// Positions declared `float` and held as float32 by the reader may have lost their detail.
+void warn_of_float32_rounding(const Element& vertex, const Cursor& cur, const std::string& name,
+                              Content& out) {
+  const VertexLayout l = vertex_layout(vertex, name);
+  bool float32 = false;
+  for (const int k : {l.x, l.y, l.z}) {
+    float32 = float32 || vertex.properties[k].type == ScalarType::kFloat32;
+  }
+  if (!float32 || !cur.rounds_float32()) return;
+  if (auto w = float32_rounding_warning(out.positions, name)) out.warnings.push_back(*w);
+}
+
+Content parse(const std::string& bytes, const std::string& name, AsciiFloat ascii_float,
+              ColourScale colour_scale) {
   const Header h = parse_header(bytes, name);
   Content out;
   Cursor cur(bytes, h.data_offset, h.format, ascii_float, name);
@@ -488,6 +553,7 @@ Content parse(const std::string& bytes, const std::string& name, AsciiFloat asci
   for (const auto& e : h.elements) {
     if (e.name == "vertex" && !have_vertices) {
       read_vertices(cur, e, name, out);
+      warn_of_float32_rounding(e, cur, name, out);
       have_vertices = true;
     } else if (e.name == "face" && have_vertices && face_list_property(e) >= 0) {
       read_faces(cur, e, name, out);
@@ -499,12 +565,12 @@ Content parse(const std::string& bytes, const std::string& name, AsciiFloat asci
   if (!cur.at_end()) {
     fail(name, "data continues after the elements the header declares (wrong element count?)");
   }
-  normalise_colors(out, name);
+  normalise_colors(out, name, colour_scale);
   return out;
 }
 
-Content read(const std::filesystem::path& path, AsciiFloat ascii_float) {
-  return parse(read_file_bytes(path), path.string(), ascii_float);
+Content read(const std::filesystem::path& path, AsciiFloat ascii_float, ColourScale colour_scale) {
+  return parse(read_file_bytes(path), path.string(), ascii_float, colour_scale);
 }
 
 namespace {
@@ -528,6 +594,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
   }
   const bool ascii = d.format == Format::kAscii;
   write_file_atomically(path, [&](std::ostream& out) {
+    out.imbue(std::locale::classic());  // "0.5" whatever the program's global locale
     out << "ply\nformat " << (ascii ? "ascii" : "binary_little_endian") << " 1.0\n"
         << "comment written by qm3d\n"
         << "element vertex " << d.positions.size() << "\n";

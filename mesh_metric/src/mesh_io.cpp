@@ -4,11 +4,12 @@
 #include <cmath>
 #include <optional>
 
+#include "halfedge_mesh.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
+#include "qm3d/common/reading.h"
 #include "qm3d/mesh/texture.h"
-#include "halfedge_mesh.h"
 #include "text_lines.h"
 
 namespace qm3d::mesh {
@@ -25,6 +26,7 @@ struct RawMesh {
   std::vector<Vec3> positions;
   std::vector<std::optional<Rgb>> colors;
   bool colors_are_unit_range = false;  // PLY: already normalised from the type's range
+  std::vector<std::string> warnings;   // the PLY reader's
   std::vector<std::uint32_t> face_offsets{0};
   std::vector<std::uint32_t> face_indices;
 };
@@ -62,6 +64,33 @@ std::uint32_t obj_index(std::string_view tok, std::size_t num_vertices, const st
   return static_cast<std::uint32_t>(i - 1);
 }
 
+// `v` lines: `x y z`, `x y z w` (w, the weight of rational curves, does not move a polygon's
+// vertex: ignored) or `x y z r g b` (MEPP2's colour convention). Other counts are errors: 7
+// values could be `x y z w r g b` or `x y z r g b a` (reading either as the other would give
+// wrong colours silently), 5 or 8+ fit neither form.
+void read_obj_vertex(Tokens& tokens, const std::string& file, std::size_t line, RawMesh& m) {
+  constexpr int kMaxValues = 8;  // enough to tell the counts apart
+  double v[kMaxValues];
+  std::string_view tok;
+  int n = 0;
+  while (n < kMaxValues && tokens.next(tok)) {
+    if (!detail::parse_double(tok, v[n])) {
+      fail(file, "line " + std::to_string(line) + ": '" + std::string(tok) + "' is not a number");
+    }
+    ++n;
+  }
+  if (n < 3) fail(file, "line " + std::to_string(line) + ": vertex needs x y z");
+  if (n != 3 && n != 4 && n != 6) {
+    fail(file, "line " + std::to_string(line) + ": a vertex with " +
+                   (n == kMaxValues ? "8 or more" : std::to_string(n)) +
+                   " values (qm3d reads 'v x y z', 'v x y z w' and 'v x y z r g b'" +
+                   (n == 7 ? "; 7 values could be x y z w r g b or x y z r g b a" : "") + ")");
+  }
+  m.positions.push_back({v[0], v[1], v[2]});
+  check_finite(m.positions.back(), m.positions.size() - 1, file);
+  m.colors.push_back(n == 6 ? std::optional<Rgb>(Rgb{v[3], v[4], v[5]}) : std::nullopt);
+}
+
 RawMesh parse_obj(const std::string& text, const std::string& file) {
   RawMesh m;
   Statements lines(text);
@@ -69,20 +98,7 @@ RawMesh parse_obj(const std::string& text, const std::string& file) {
   Tokens tokens;
   while (lines.next(keyword, tokens)) {
     if (keyword == "v") {
-      double v[7];
-      int n = 0;
-      while (n < 7 && tokens.next(tok)) {
-        if (!detail::parse_double(tok, v[n])) {
-          fail(file, "line " + std::to_string(lines.line_number()) + ": '" + std::string(tok) +
-                         "' is not a number");
-        }
-        ++n;
-      }
-      if (n < 3) fail(file, "line " + std::to_string(lines.line_number()) + ": vertex needs x y z");
-      m.positions.push_back({v[0], v[1], v[2]});
-      check_finite(m.positions.back(), m.positions.size() - 1, file);
-      // `v x y z r g b` (MEPP2's convention); `v x y z w` carries no colour.
-      m.colors.push_back(n >= 6 ? std::optional<Rgb>(Rgb{v[3], v[4], v[5]}) : std::nullopt);
+      read_obj_vertex(tokens, file, lines.line_number(), m);
     } else if (keyword == "f") {
       while (tokens.next(tok)) {
         m.face_indices.push_back(obj_index(tok, m.positions.size(), file, lines.line_number()));
@@ -204,9 +220,10 @@ RawMesh parse_off(const std::string& text, const std::string& file) {
 
 // ---- PLY -------------------------------------------------------------------------------------
 
-RawMesh from_ply(const std::string& bytes, const std::string& file) {
-  ply::Content c = ply::parse(bytes, file);
+RawMesh from_ply(const std::string& bytes, const std::string& file, ColourScale scale) {
+  ply::Content c = ply::parse(bytes, file, ply::AsciiFloat::kDouble, scale);
   RawMesh m;
+  m.warnings = std::move(c.warnings);
   m.positions = std::move(c.positions);
   m.colors.resize(m.positions.size());
   for (std::size_t i = 0; i < c.colors.size(); ++i) m.colors[i] = c.colors[i];
@@ -226,11 +243,13 @@ MeshFormat format_of(const std::filesystem::path& path) {
   fail(path.string(), "unknown mesh format '." + ext + "' (expected .obj, .off or .ply)");
 }
 
-RawMesh parse_raw(const std::string& bytes, MeshFormat format, const std::string& name) {
+RawMesh parse_raw(const std::string& bytes, MeshFormat format, const std::string& name,
+                  ColourScale scale) {
   switch (format) {
     case MeshFormat::kObj: return parse_obj(bytes, name);
     case MeshFormat::kOff: return parse_off(bytes, name);
-    case MeshFormat::kPly: return from_ply(bytes, name);
+    case MeshFormat::kPly:
+      return from_ply(bytes, name, scale);
   }
   fail(name, "unknown mesh format");
 }
@@ -243,10 +262,12 @@ double to_float_precision(double x) {
   return f;
 }
 
-// All vertices or none have colours; returns them in [0, 1] at float precision (MEPP2).
-std::vector<Rgb> vertex_colors(const RawMesh& m, const std::string& file) {
+// All vertices or none have colours; returns them in [0, 1] at float precision (MEPP2), the
+// scale of OBJ / OFF colours chosen by `scale` (reading.h; its warning added to `warnings`).
+std::vector<Rgb> vertex_colors(const RawMesh& m, const std::string& file, ColourScale scale,
+                               std::vector<std::string>& warnings) {
   std::size_t missing = 0, first_missing = 0;
-  double max_value = 0;
+  ColourValues values;
   for (std::size_t i = 0; i < m.colors.size(); ++i) {
     if (!m.colors[i]) {
       if (missing++ == 0) first_missing = i;
@@ -254,10 +275,10 @@ std::vector<Rgb> vertex_colors(const RawMesh& m, const std::string& file) {
     }
     for (double v : {m.colors[i]->r, m.colors[i]->g, m.colors[i]->b}) {
       if (!(v >= 0.0) || v > 255.5) {
-        fail(file, "vertex " + std::to_string(i) + " has colour value " + std::to_string(v) +
+        fail(file, "vertex " + std::to_string(i) + " has colour value " + number_text(v) +
                        " outside [0, 1] and [0, 255]");
       }
-      max_value = std::max(max_value, v);
+      values.add(v);
     }
   }
   if (missing == m.colors.size()) fail(file, "no vertex colours (CMDM and PCQM need a colour per vertex)");
@@ -266,11 +287,12 @@ std::vector<Rgb> vertex_colors(const RawMesh& m, const std::string& file) {
                    std::to_string(m.colors.size()) + " vertices (first: vertex " +
                    std::to_string(first_missing) + ")");
   }
-  const bool from_255 = !m.colors_are_unit_range && max_value > 1.0;
+  // PLY colours arrive in [0, 1] already (their scale was chosen by the PLY reader).
+  const ColourConversion from_file =
+      m.colors_are_unit_range ? ColourConversion{} : colour_conversion(values, scale, file);
+  if (from_file.warning) warnings.push_back(*from_file.warning);
   std::vector<Rgb> out(m.colors.size());
-  auto convert = [from_255](double c) {
-    return to_float_precision(from_255 ? std::floor(c + 0.5) / 255.0 : c);
-  };
+  auto convert = [&from_file](double c) { return to_float_precision(from_file(c)); };
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = {convert(m.colors[i]->r), convert(m.colors[i]->g), convert(m.colors[i]->b)};
   }
@@ -339,12 +361,15 @@ void drop_unreferenced(MeshFile& out, const std::string& file) {
 
 MeshFile parse_mesh(const std::string& bytes, MeshFormat format, const std::string& file,
                     const MeshReadOptions& options) {
-  RawMesh raw = parse_raw(bytes, format, file);
+  RawMesh raw = parse_raw(bytes, format, file, options.colour_scale);
   if (raw.positions.empty()) fail(file, "no vertices");
   MeshFile out;
+  out.warnings = std::move(raw.warnings);
   const bool has_colors = std::any_of(raw.colors.begin(), raw.colors.end(),
                                       [](const auto& c) { return c.has_value(); });
-  if (options.require_colors || has_colors) out.mesh.colors = vertex_colors(raw, file);
+  if (options.require_colors || has_colors) {
+    out.mesh.colors = vertex_colors(raw, file, options.colour_scale, out.warnings);
+  }
   out.mesh.triangles = triangulate(raw, file, out.warnings);
   if (out.mesh.triangles.empty()) {
     fail(file, "no faces (a point cloud? score it with `qm3d pcqm`)");
@@ -388,7 +413,7 @@ MeshFile mesh_from_arrays(std::vector<Vec3> positions, std::vector<Rgb> colors,
   for (std::size_t i = 0; i < colors.size(); ++i) {
     for (double* c : {&colors[i].r, &colors[i].g, &colors[i].b}) {
       if (!(*c >= 0.0 && *c <= 1.0)) {
-        fail(name, "vertex " + std::to_string(i) + " has colour value " + std::to_string(*c) +
+        fail(name, "vertex " + std::to_string(i) + " has colour value " + number_text(*c) +
                        " outside [0, 1]");
       }
       *c = to_float_precision(*c);
@@ -401,20 +426,27 @@ MeshFile mesh_from_arrays(std::vector<Vec3> positions, std::vector<Rgb> colors,
 }
 
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path) {
-  return read_mesh_vertices(path, format_of(path));
+  return read_mesh_vertices_data(path, format_of(path)).cloud;
 }
 
 ColoredCloud read_mesh_vertices(const std::filesystem::path& path, MeshFormat format) {
+  return read_mesh_vertices_data(path, format).cloud;
+}
+
+CloudData read_mesh_vertices_data(const std::filesystem::path& path, MeshFormat format,
+                                  const ReadOptions& options) {
   const std::string bytes = read_file_bytes(path);
   if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
-    return vertex_cloud(parse_textured_obj(bytes, path).file.mesh);
+    MeshFile file = parse_textured_obj(bytes, path).file;
+    return CloudData{vertex_cloud(file.mesh), std::move(file.warnings)};
   }
-  RawMesh raw = parse_raw(bytes, format, path.string());
+  RawMesh raw = parse_raw(bytes, format, path.string(), options.colour_scale);
   if (raw.positions.empty()) fail(path.string(), "no vertices");
-  ColoredCloud cloud;
-  cloud.colors = vertex_colors(raw, path.string());
-  cloud.positions = std::move(raw.positions);
-  return cloud;
+  CloudData out;
+  out.warnings = std::move(raw.warnings);
+  out.cloud.colors = vertex_colors(raw, path.string(), options.colour_scale, out.warnings);
+  out.cloud.positions = std::move(raw.positions);
+  return out;
 }
 
 }  // namespace qm3d::mesh

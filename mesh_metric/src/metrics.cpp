@@ -19,14 +19,18 @@ MeshFormat mesh_format(FileFormat f, const std::filesystem::path& path) {
   throw FormatError(path.string() + ": a PCD file holds a point cloud, not a mesh");
 }
 
-MeshData read_mesh_data(const std::filesystem::path& path, FileFormat format) {
+MeshData read_mesh_data(const std::filesystem::path& path, FileFormat format,
+                        const ReadOptions& options) {
   const MeshFormat f = mesh_format(format, path);
   // A textured OBJ takes its vertex colours from its texture (texture.h).
   if (f == MeshFormat::kObj && obj_is_textured(read_file_bytes(path))) {
     MeshFile file = read_textured_obj(path).file;
     return MeshData{std::move(file.mesh), true, std::move(file.warnings)};
   }
-  MeshFile file = read_mesh(path, f, MeshReadOptions{false});
+  MeshReadOptions o;
+  o.require_colors = false;
+  o.colour_scale = options.colour_scale;
+  MeshFile file = read_mesh(path, f, o);
   const bool colors = !file.mesh.colors.empty();
   return MeshData{std::move(file.mesh), colors, std::move(file.warnings)};
 }
@@ -52,8 +56,9 @@ ColoredCloud sample(const Input& input, const SurfaceSampling& s) {
 
 void register_metrics(Registry& registry) {
   registry.readers().mesh = read_mesh_data;
-  registry.readers().mesh_vertices = [](const std::filesystem::path& path, FileFormat format) {
-    return read_mesh_vertices(path, mesh_format(format, path));
+  registry.readers().mesh_vertices = [](const std::filesystem::path& path, FileFormat format,
+                                        const ReadOptions& options) {
+    return read_mesh_vertices_data(path, mesh_format(format, path), options);
   };
   registry.set_sampler(sample);
   registry.add(cmdm_spec());

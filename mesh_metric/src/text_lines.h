@@ -6,6 +6,8 @@
 #include <string>
 #include <string_view>
 
+#include "qm3d/common/reading.h"
+
 namespace qm3d::mesh::detail {
 
 /// The whitespace of the text formats: blank, tab, carriage return, form feed, vertical tab
@@ -93,12 +95,10 @@ class Statements {
   LineReader lines_;
 };
 
-/// Parses a whole token as a double; false when it is not a number.
+/// Parses a whole token as a double whatever the C locale; false when it is not a number (a
+/// value beyond double's range is +-inf or 0, as strtod gives it, for the callers' checks).
 inline bool parse_double(std::string_view token, double& value) {
-  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
-  const auto* end = token.data() + token.size();
-  const auto result = std::from_chars(token.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end;
+  return parse_number(token, value);
 }
 
 /// Parses a whole token as a (possibly negative) integer.

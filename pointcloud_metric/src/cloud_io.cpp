@@ -1,21 +1,28 @@
 #include "qm3d/pointcloud/cloud_io.h"
 
+#include <locale.h>
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
-#include <string>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
+#include "qm3d/common/reading.h"
 
 namespace qm3d::pointcloud {
 namespace {
@@ -34,13 +41,14 @@ FormatError no_colours(const std::filesystem::path& path, const std::string& exp
                      "expected " + expected + ")");
 }
 
-ColoredCloud read_ply(const std::filesystem::path& path) {
+CloudData read_ply(const std::filesystem::path& path, ColourScale colour_scale) {
   // ASCII `float` values as float32, as the reference's tinyply reads them (SPEC-PCQM §9.1).
-  ply::Content content = ply::read(path, ply::AsciiFloat::kAsDeclared);
+  ply::Content content = ply::read(path, ply::AsciiFloat::kAsDeclared, colour_scale);
   if (content.colors.empty()) {
     throw no_colours(path, "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties");
   }
-  return ColoredCloud{std::move(content.positions), std::move(content.colors)};
+  return CloudData{ColoredCloud{std::move(content.positions), std::move(content.colors)},
+                   std::move(content.warnings)};
 }
 
 void require_readable(const std::filesystem::path& path) {
@@ -208,40 +216,276 @@ PcdLayout read_pcd_layout(const std::filesystem::path& path) {
   return l;
 }
 
-// PCL allocates the whole point array from the header's counts: refuse counts the file cannot
-// hold (binary: exact size; binary_compressed: LZF expands at most ~1:64 here; ASCII: at least
-// two characters per value).
-void validate_pcd_header(const std::filesystem::path& path) {
-  const PcdLayout l = read_pcd_layout(path);
-  std::uintmax_t values = 0, point_step = 0;
+std::uintmax_t field_count(const PcdLayout& l, std::size_t f) {
+  return l.counts.empty() ? 1 : l.counts[f];
+}
+
+// Where the fields qm3d reads are: their field index and their first ASCII column.
+struct PcdColumns {
+  std::size_t field[4] = {0, 0, 0, 0};  // x, y, z, rgb (or rgba)
+  std::size_t column[4] = {0, 0, 0, 0};
+  std::size_t columns = 0;  // values per ASCII line (a field of COUNT n takes n)
+};
+
+std::optional<std::size_t> layout_field(const PcdLayout& l, const std::string& name) {
   for (std::size_t f = 0; f < l.fields.size(); ++f) {
-    const std::uintmax_t count = l.counts.empty() ? 1 : l.counts[f];
-    values += count;
-    point_step += l.sizes[f] * count;
+    if (l.fields[f] == name) return f;
   }
-  const std::uintmax_t file_size = std::filesystem::file_size(path);
-  const std::uintmax_t body = file_size > l.header_bytes ? file_size - l.header_bytes : 0;
-  const std::uintmax_t needed = l.data == "ascii"    ? l.points * 2 * values
-                                : l.data == "binary" ? l.points * point_step
-                                                     : l.points * point_step / 64;
-  if (needed > body + 64) {
-    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
-                      " points but the file is too short to hold them");
+  return std::nullopt;
+}
+
+// The fields x, y, z (float or double) and rgb / rgba (4 bytes), each of COUNT 1.
+PcdColumns pcd_columns(const PcdLayout& l, const std::filesystem::path& path) {
+  PcdColumns c;
+  const char* names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    const auto f = layout_field(l, names[a]);
+    if (!f) throw FormatError(path.string() + ": PCD has no '" + names[a] + "' field");
+    if (l.types[*f] != "F") {
+      throw FormatError(path.string() + ": PCD field '" + names[a] + "' is not float or double");
+    }
+    c.field[a] = *f;
+  }
+  auto rgb = layout_field(l, "rgb");
+  if (!rgb) rgb = layout_field(l, "rgba");
+  if (!rgb) throw no_colours(path, "a packed 'rgb' or 'rgba' PCD field");
+  if (l.sizes[*rgb] != 4) {
+    throw FormatError(path.string() + ": PCD field '" + l.fields[*rgb] +
+                      "' is not a packed 4-byte colour");
+  }
+  c.field[3] = *rgb;
+  for (const std::size_t f : c.field) {
+    if (field_count(l, f) != 1) {
+      throw FormatError(path.string() + ": PCD field '" + l.fields[f] + "' has COUNT " +
+                        std::to_string(field_count(l, f)) +
+                        " (x, y, z and rgb / rgba hold one value each)");
+    }
+  }
+  std::vector<std::size_t> first_column(l.fields.size());
+  for (std::size_t f = 0; f < l.fields.size(); ++f) {
+    first_column[f] = c.columns;
+    c.columns += field_count(l, f);
+  }
+  for (int k = 0; k < 4; ++k) c.column[k] = first_column[c.field[k]];
+  return c;
+}
+
+// One line of an ASCII PCD split into its values.
+class PcdLine {
+ public:
+  PcdLine(const std::filesystem::path& path, std::size_t line) : path_(path), line_(line) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw FormatError(path_.string() + ": line " + std::to_string(line_) + ": " + what);
+  }
+
+  void split(std::string_view text) {
+    tokens_.clear();
+    std::size_t i = 0;
+    while (i < text.size()) {
+      while (i < text.size() && is_space(text[i])) ++i;
+      const std::size_t begin = i;
+      while (i < text.size() && !is_space(text[i])) ++i;
+      if (i > begin) tokens_.push_back(text.substr(begin, i - begin));
+    }
+  }
+
+  std::size_t size() const { return tokens_.size(); }
+
+  template <typename T>
+  T number(std::size_t column) const {
+    T v{};
+    if (!parse_number(tokens_[column], v)) not_a(column, "a number");
+    return v;
+  }
+
+  template <typename T>
+  T integer(std::size_t column) const {
+    const std::string_view t = tokens_[column];
+    T v{};
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size()) not_a(column, "a 32-bit integer");
+    return v;
+  }
+
+ private:
+  static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+  [[noreturn]] void not_a(std::size_t column, const char* what) const {
+    fail("'" + std::string(tokens_[column]) + "' (value " + std::to_string(column + 1) +
+         ") is not " + what);
+  }
+
+  const std::filesystem::path& path_;
+  std::size_t line_;
+  std::vector<std::string_view> tokens_;
+};
+
+// A packed colour as the ASCII line writes it: TYPE F a float whose bits are 0x00RRGGBB (what
+// PCL reads; PCL 1.13 itself writes rgb as TYPE U), U / I the integer.
+Rgb ascii_packed_colour(const PcdLine& line, std::size_t column, const std::string& type) {
+  std::uint32_t bits = 0;
+  if (type == "F") {
+    const float f = line.number<float>(column);
+    std::memcpy(&bits, &f, sizeof bits);
+  } else if (type == "U") {
+    bits = line.integer<std::uint32_t>(column);
+  } else {
+    bits = static_cast<std::uint32_t>(line.integer<std::int32_t>(column));
+  }
+  return Rgb{((bits >> 16) & 0xffu) / kChannelMax, ((bits >> 8) & 0xffu) / kChannelMax,
+             (bits & 0xffu) / kChannelMax};
+}
+
+void read_ascii_point(const PcdLine& line, const PcdLayout& l, const PcdColumns& c, Vec3& position,
+                      Rgb& colour) {
+  if (line.size() != c.columns) {
+    line.fail(std::to_string(line.size()) + " values, but FIELDS and COUNT declare " +
+              std::to_string(c.columns));
+  }
+  for (std::size_t k = 0; k < line.size(); ++k) line.number<double>(k);  // every value a number
+  for (int a = 0; a < 3; ++a) {
+    const std::size_t column = c.column[a];
+    position[a] =
+        l.sizes[c.field[a]] == 4 ? double(line.number<float>(column)) : line.number<double>(column);
+  }
+  colour = ascii_packed_colour(line, c.column[3], l.types[c.field[3]]);
+}
+
+// ASCII PCD is parsed here rather than by PCL: PCL reads a line with a value too many or too
+// few, or data beyond POINTS, without a word (points at (0,0,0), black, or dropped). Numbers are
+// parsed as their SIZE says (float32 or double), as PCL does, whatever the C locale.
+ColoredCloud read_ascii_pcd(const PcdLayout& l, const PcdColumns& c,
+                            const std::filesystem::path& path) {
+  const std::string bytes = read_file_bytes(path);
+  ColoredCloud out;
+  out.positions.resize(l.points);
+  out.colors.resize(l.points);
+  std::size_t n = 0, line_no = 1 + static_cast<std::size_t>(std::count(
+                                       bytes.begin(), bytes.begin() + l.header_bytes, '\n'));
+  for (std::size_t pos = l.header_bytes; pos < bytes.size(); ++line_no) {
+    const std::size_t end = std::min(bytes.find('\n', pos), bytes.size());
+    const std::string_view text(bytes.data() + pos, end - pos);
+    pos = end + 1;
+    PcdLine line(path, line_no);
+    line.split(text);
+    if (line.size() == 0) continue;
+    if (n == l.points) {
+      line.fail("more points than POINTS " + std::to_string(l.points) + " declares");
+    }
+    read_ascii_point(line, l, c, out.positions[n], out.colors[n]);
+    ++n;
+  }
+  if (n < l.points) {
+    throw FormatError(path.string() + ": PCD data ends after " + std::to_string(n) + " of the " +
+                      std::to_string(l.points) + " points POINTS declares");
+  }
+  return out;
+}
+
+// The byte size of one point record, and the number of ASCII values per line.
+std::uintmax_t point_bytes(const PcdLayout& l) {
+  std::uintmax_t bytes = 0;
+  for (std::size_t f = 0; f < l.fields.size(); ++f) bytes += l.sizes[f] * field_count(l, f);
+  return bytes;
+}
+
+std::uintmax_t values_per_point(const PcdLayout& l) {
+  std::uintmax_t values = 0;
+  for (std::size_t f = 0; f < l.fields.size(); ++f) values += field_count(l, f);
+  return values;
+}
+
+/// LZF (PCL's binary_compressed) writes at least 3 bytes for a back reference of up to 264
+/// bytes: no stream expands more than 88-fold.
+constexpr std::uintmax_t kLzfMaxExpansion = 88;
+
+// binary_compressed: the data starts with the compressed and uncompressed byte sizes, which
+// PCL allocates from (twice the uncompressed size) before it checks them. The uncompressed size
+// must be POINTS x point size, the compressed one must fit in the file, and the one must be
+// reachable from the other.
+void check_compressed_sizes(const PcdLayout& l, std::uintmax_t body,
+                            const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(l.header_bytes));
+  std::uint32_t sizes[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(sizes), sizeof sizes);
+  if (!in) throw FormatError(path.string() + ": PCD binary_compressed data is truncated");
+  const std::uintmax_t compressed = sizes[0], uncompressed = sizes[1];
+  const std::uintmax_t expected = l.points * point_bytes(l);
+  if (uncompressed != expected) {
+    throw FormatError(path.string() + ": PCD binary_compressed data claims " +
+                      std::to_string(uncompressed) + " bytes uncompressed, but POINTS " +
+                      std::to_string(l.points) + " x " + std::to_string(point_bytes(l)) +
+                      " bytes per point is " + std::to_string(expected));
+  }
+  if (compressed + 8 > body || uncompressed > compressed * kLzfMaxExpansion) {
+    throw FormatError(path.string() + ": PCD binary_compressed data claims " +
+                      std::to_string(compressed) + " compressed bytes, but the file holds " +
+                      std::to_string(body >= 8 ? body - 8 : 0) + " after the header (truncated?)");
   }
 }
 
-ColoredCloud read_pcd(const std::filesystem::path& path) {
-  require_readable(path);
+// A binary PCD holds POINTS records, then nothing but zeros (PCL's writer pads its files with up
+// to a page of zeros): other bytes after the records are points POINTS does not count.
+void check_binary_size(const PcdLayout& l, std::uintmax_t body, const std::filesystem::path& path) {
+  const std::uintmax_t records = l.points * point_bytes(l);
+  const auto fail = [&](const std::string& what) {
+    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
+                      " points of " + std::to_string(point_bytes(l)) + " bytes, but the file " +
+                      what + " (" + std::to_string(body) + " data bytes)");
+  };
+  if (records > body) fail("is too short to hold them");
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(l.header_bytes + records));
+  char chunk[4096];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+    const auto n = static_cast<std::size_t>(in.gcount());
+    if (std::any_of(chunk, chunk + n, [](char c) { return c != 0; })) {
+      fail("holds more data after them");
+    }
+  }
+}
+
+// PCL allocates the whole point array from the header's counts: refuse counts the file cannot
+// hold before anything is allocated (binary: exact size; binary_compressed: the sizes its data
+// claims; ASCII: at least two characters per value).
+void validate_pcd_sizes(const PcdLayout& l, const std::filesystem::path& path) {
+  const std::uintmax_t file_size = std::filesystem::file_size(path);
+  const std::uintmax_t body = file_size > l.header_bytes ? file_size - l.header_bytes : 0;
+  if (l.points == 0) return;
+  if (l.data == "ascii" && l.points * 2 * values_per_point(l) > body + 1) {
+    throw FormatError(path.string() + ": PCD header declares " + std::to_string(l.points) +
+                      " points but the file is too short to hold them");
+  }
+  if (l.data == "binary") check_binary_size(l, body, path);
+  if (l.data == "binary_compressed") check_compressed_sizes(l, body, path);
+}
+
+// PCL's readers format and parse some numbers through the C locale (setlocale): they run in the
+// "C" locale on this thread whatever the program chose.
+class ClassicLocaleScope {
+ public:
+  ClassicLocaleScope() : c_(newlocale(LC_ALL_MASK, "C", nullptr)) {
+    if (c_ != nullptr) previous_ = uselocale(c_);
+  }
+  ~ClassicLocaleScope() {
+    if (c_ == nullptr) return;
+    uselocale(previous_);
+    freelocale(c_);
+  }
+  ClassicLocaleScope(const ClassicLocaleScope&) = delete;
+  ClassicLocaleScope& operator=(const ClassicLocaleScope&) = delete;
+
+ private:
+  locale_t c_;
+  locale_t previous_ = nullptr;
+};
+
+ColoredCloud read_binary_pcd(const std::filesystem::path& path) {
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // errors are ours, one line each
+  const ClassicLocaleScope c_locale;
   pcl::PCDReader reader;
-  validate_pcd_header(path);
   pcl::PCLPointCloud2 cloud = read_pcd_header(path, reader);
-  // Check the fields on the header before reading any data.
-  coordinate_field(cloud, path, "x");
-  coordinate_field(cloud, path, "y");
-  coordinate_field(cloud, path, "z");
-  colour_field(cloud, path);
-  if (std::size_t(cloud.width) * cloud.height == 0) return ColoredCloud{};
   int status = -1;
   try {
     status = reader.read(path.string(), cloud);
@@ -272,30 +516,55 @@ ColoredCloud read_pcd(const std::filesystem::path& path) {
   out.positions.resize(n);
   out.colors.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) {
-      out.positions[i][a] = coordinate(cloud, *xyz[a], i);
-      if (!std::isfinite(out.positions[i][a])) {
+    for (int a = 0; a < 3; ++a) out.positions[i][a] = coordinate(cloud, *xyz[a], i);
+    out.colors[i] = packed_colour(cloud, rgb, i);
+  }
+  return out;
+}
+
+CloudData read_pcd(const std::filesystem::path& path) {
+  require_readable(path);
+  const PcdLayout l = read_pcd_layout(path);
+  validate_pcd_sizes(l, path);
+  const PcdColumns columns = pcd_columns(l, path);  // fields checked before any data is read
+  CloudData out;
+  if (l.points == 0) return out;
+  out.cloud = l.data == "ascii" ? read_ascii_pcd(l, columns, path) : read_binary_pcd(path);
+  for (std::size_t i = 0; i < out.cloud.size(); ++i) {
+    for (double v : out.cloud.positions[i]) {
+      if (!std::isfinite(v)) {
         throw FormatError(path.string() + ": point " + std::to_string(i) +
                           " has a non-finite coordinate (PCD 'dense false' clouds are not supported)");
       }
     }
-    out.colors[i] = packed_colour(cloud, rgb, i);
+  }
+  const bool float32 = l.sizes[columns.field[0]] == 4 || l.sizes[columns.field[1]] == 4 ||
+                       l.sizes[columns.field[2]] == 4;
+  if (float32) {
+    if (auto w = float32_rounding_warning(out.cloud.positions, path.string())) {
+      out.warnings.push_back(*w);
+    }
   }
   return out;
 }
 
 }  // namespace
 
+CloudData read_cloud_data(const std::filesystem::path& path, CloudFormat format,
+                          const ReadOptions& options) {
+  return format == CloudFormat::kPcd ? read_pcd(path) : read_ply(path, options.colour_scale);
+}
+
 ColoredCloud read_cloud(const std::filesystem::path& path) {
   const std::string ext = lower(path.extension().string());
-  if (ext == ".ply") return read_ply(path);
-  if (ext == ".pcd") return read_pcd(path);
+  if (ext == ".ply") return read_cloud_data(path, CloudFormat::kPly).cloud;
+  if (ext == ".pcd") return read_cloud_data(path, CloudFormat::kPcd).cloud;
   throw FormatError(path.string() + ": unknown point-cloud extension '" +
                     path.extension().string() + "' (expected .ply or .pcd)");
 }
 
 ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format) {
-  return format == CloudFormat::kPcd ? read_pcd(path) : read_ply(path);
+  return read_cloud_data(path, format).cloud;
 }
 
 }  // namespace qm3d::pointcloud

@@ -6,11 +6,13 @@
 namespace qm3d::pointcloud {
 
 void register_metrics(Registry& registry) {
-  registry.readers().cloud = [](const std::filesystem::path& path, FileFormat format) {
+  registry.readers().cloud = [](const std::filesystem::path& path, FileFormat format,
+                                const ReadOptions& options) {
     if (format != FileFormat::kPly && format != FileFormat::kPcd) {
       throw FormatError(path.string() + ": not a PLY or PCD point cloud");
     }
-    return read_cloud(path, format == FileFormat::kPcd ? CloudFormat::kPcd : CloudFormat::kPly);
+    return read_cloud_data(path, format == FileFormat::kPcd ? CloudFormat::kPcd : CloudFormat::kPly,
+                           options);
   };
   registry.add(pcqm_spec());
   if (registry.has_sampler()) registry.add(pcqm_sampled_spec(registry.sampler()));

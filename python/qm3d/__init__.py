@@ -95,13 +95,23 @@ def _array(value, argument, name):
         raise ValueError(f"{argument}: {name}: not an array ({e})") from None
 
 
+_COLOUR_SCALES = ("auto", "unit", "byte")
+
+
+def _colour_scale(value):
+    """The colour_scale= keyword, checked (as --colour-scale)."""
+    if value not in _COLOUR_SCALES:
+        raise ValueError(f"colour_scale: expected 'auto', 'unit' or 'byte', got {value!r}")
+    return value
+
+
 class _Inputs:
     """The inputs of one call, built once per way a metric reads them (mesh or cloud)."""
 
-    def __init__(self, obj, argument):
+    def __init__(self, obj, argument, colour_scale="auto"):
         self._obj, self._argument, self._made = obj, argument, {}
         if isinstance(obj, (str, bytes, _os.PathLike)):
-            self._file = _qm3d.Input.from_file(_os.fsdecode(obj))
+            self._file = _qm3d.Input.from_file(_os.fsdecode(obj), _colour_scale(colour_scale))
             self.kind = self._file.kind
         else:
             p, c, f, name = _arrays_of(obj, argument)
@@ -214,7 +224,7 @@ def _installed_tables():
 _DEFAULT_TABLES = None if _os.environ.get("QM3D_DATA_DIR") else _installed_tables()
 
 _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
-                 "progress")
+                 "progress", "colour_scale")
 
 
 def metrics():
@@ -267,7 +277,7 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     known = {o["name"]: o for o in spec["options"]}
     options = {}
     run = dict(direction=None, threads=0, per_element=False, data_dir=None, weights=None,
-               model=None, progress=None)
+               model=None, progress=None, colour_scale="auto")
     for key, value in kwargs.items():
         if key in run:
             run[key] = value
@@ -296,8 +306,8 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
                else [_finite(f"{name}: weights", w) for w in run["weights"]])
     # Inputs made for this call alone are freed as soon as the metric holds its own copies.
     release = release or (ref_inputs is None and dist_inputs is None)
-    ref_inputs = ref_inputs or _Inputs(reference, "reference")
-    dist_inputs = dist_inputs or _Inputs(distorted, "distorted")
+    ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"])
+    dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"])
     result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
                        _json.dumps(options), run["direction"], _thread_count(run["threads"]),
                        bool(run["per_element"]),
@@ -325,6 +335,10 @@ _COMMON_DOC = """
         threads: OpenMP threads (0 = all cores), as --threads; results do not depend on it.
         per_element: keep the per-vertex / per-point local distortion as numpy arrays.
         data_dir: folder of the LAB2000HL tables (default: $QM3D_DATA_DIR, else the built-in).
+        colour_scale: "auto", "unit" or "byte", as --colour-scale: the scale of colours stored
+            as numbers in files (OBJ, OFF, PLY float). auto = the reference's rule (0..255 when
+            any value is above 1; warns when few values decide), unit = 0..1 (values above 1
+            clamped), byte = 0..255.
 {model}        progress: optional callable(stage: str, fraction: float), told each stage.
 {options}
     Returns:
@@ -350,7 +364,8 @@ def _make_metric_function(spec):
     params += [_inspect.Parameter("direction", kw, default=None),
                _inspect.Parameter("threads", kw, default=0),
                _inspect.Parameter("per_element", kw, default=False),
-               _inspect.Parameter("data_dir", kw, default=None)]
+               _inspect.Parameter("data_dir", kw, default=None),
+               _inspect.Parameter("colour_scale", kw, default="auto")]
     if spec["takes_model"]:
         params += [_inspect.Parameter("weights", kw, default=None),
                    _inspect.Parameter("model", kw, default=None)]
@@ -386,7 +401,9 @@ def compare(reference, distorted, **options):
         raise TypeError("compare(): weights apply to one metric; give model= (a model file "
                         "names its metric) or call the metric")
     _check_option_names("compare", options)
-    ref_inputs, dist_inputs = _Inputs(reference, "reference"), _Inputs(distorted, "distorted")
+    scale = options.get("colour_scale", "auto")
+    ref_inputs = _Inputs(reference, "reference", scale)
+    dist_inputs = _Inputs(distorted, "distorted", scale)
     out = {}
     names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
     for i, name in enumerate(names):
@@ -419,27 +436,31 @@ def _options_for(name, options):
 
 # ---- tools ---------------------------------------------------------------------------------
 
-def read_mesh(path):
+def read_mesh(path, colour_scale="auto"):
     """Reads a mesh file (OBJ, OFF, PLY; a textured OBJ gets its texture's colours) as qm3d's
-    metrics read it.
+    metrics read it (colour_scale as for the metrics).
 
     Returns:
         dict: positions (V, 3) float64, colors (V, 3) float64 in 0-1 (None when the file has
         none), faces (F, 3) uint32, warnings (list of str: repairs made, e.g. vertices no face
         uses dropped).
     """
-    p, c, f, w = _qm3d.Input.from_file(_os.fsdecode(path)).mesh_arrays()
+    p, c, f, w = _qm3d.Input.from_file(_os.fsdecode(path),
+                                       _colour_scale(colour_scale)).mesh_arrays()
     return {"positions": p, "colors": c, "faces": f, "warnings": list(w)}
 
 
-def read_cloud(path):
-    """Reads a point cloud (PLY, PCD), or a mesh file's vertices, as PCQM reads it.
+def read_cloud(path, colour_scale="auto"):
+    """Reads a point cloud (PLY, PCD), or a mesh file's vertices, as PCQM reads it
+    (colour_scale as for the metrics).
 
     Returns:
-        dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1.
+        dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1, warnings (list of str:
+        e.g. a colour scale chosen on few values, float32 coordinates that lost detail).
     """
-    p, c = _qm3d.Input.from_file(_os.fsdecode(path)).cloud_arrays()
-    return {"positions": p, "colors": c}
+    p, c, w = _qm3d.Input.from_file(_os.fsdecode(path),
+                                    _colour_scale(colour_scale)).cloud_arrays()
+    return {"positions": p, "colors": c, "warnings": list(w)}
 
 
 def sample(mesh, points=None, density=None, seed=1):

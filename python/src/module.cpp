@@ -280,8 +280,14 @@ PYBIND11_MODULE(_qm3d, m) {
   });
 
   py::class_<Input>(m, "Input")
-      .def_static("from_file", [](const std::string& path) { return registry().read(path); },
-                  py::arg("path"))
+      .def_static(
+          "from_file",
+          [](const std::string& path, const std::string& colour_scale) {
+            ReadOptions o;
+            o.colour_scale = parse_colour_scale(colour_scale);  // ValueError otherwise
+            return registry().read(path, o);
+          },
+          py::arg("path"), py::arg("colour_scale") = "auto")
       .def_static("from_arrays", &input_from_arrays, py::arg("positions"), py::arg("colors"),
                   py::arg("faces"), py::arg("name"), py::arg("as_mesh"))
       .def_property_readonly("name", &Input::name)
@@ -303,7 +309,8 @@ PYBIND11_MODULE(_qm3d, m) {
           py::gil_scoped_release release;
           return in.cloud();
         }();
-        return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors));
+        return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors),
+                              in.cloud_warnings());
       });
 
   m.def("applicable", [](const Input& ref, const Input& dist) {

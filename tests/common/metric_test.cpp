@@ -188,9 +188,9 @@ TEST(Input, ReleaseFreesWhatWasReadFromTheFileAndKeepsDataInMemory) {
                          "property float y\nproperty float z\nend_header\n0 0 0\n";
   Registry reg;
   int reads = 0;
-  reg.readers().cloud = [&](const std::filesystem::path&, FileFormat) {
+  reg.readers().cloud = [&](const std::filesystem::path&, FileFormat, const ReadOptions&) {
     ++reads;
-    return cloud_of({double(reads)});
+    return CloudData{cloud_of({double(reads)}), {}};
   };
   const Input in = Input::from_file(path, reg);
   EXPECT_EQ(in.cloud().positions[0][0], 1.0);

@@ -6,8 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
+#include "comma_locale.h"
 #include "qm3d/common/error.h"
 
 namespace qm3d::ply {
@@ -198,7 +201,10 @@ TEST(Ply, MalformedInputsAreNamedErrors) {
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n3 0 1 22222222222222222222222222222222222\n";
-  EXPECT_NE(error_of(huge_index).find("face 0 refers to vertex 222222222222222"), std::string::npos)
+  EXPECT_NE(error_of(huge_index)
+                .find("face 0 (line 13): item of 'vertex_indices' "
+                      "22222222222222222222222222222222222 is out of range for int"),
+            std::string::npos)
       << error_of(huge_index);
 
   b = triangle();
@@ -250,6 +256,173 @@ TEST(Ply, WriterRoundTripsThroughTheReader) {
     EXPECT_EQ(c.positions[0][1], 0.2);
     EXPECT_EQ(c.colors[1].g, 1.0);
     EXPECT_EQ(c.face_indices, (std::vector<std::uint32_t>{0, 1, 2}));
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A two-vertex ASCII PLY whose second vertex (line 12, 13 with 'q') is `0 0 0 VALUE 0 0`, the
+// colours of type `type`, or `0 0 0 1 2 3 VALUE` with VALUE an extra property 'q' of type `type`.
+std::string ascii_value(const std::string& type, const std::string& value, bool as_colour) {
+  const std::string colour_type = as_colour ? type : "uchar";
+  std::string h =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nproperty " +
+      colour_type + " red\nproperty " + colour_type + " green\nproperty " + colour_type + " blue\n";
+  if (!as_colour) h += "property " + type + " q\n";
+  h += "end_header\n";
+  return as_colour ? h + "0 0 0 1 2 3\n0 0 0 " + value + " 0 0\n"
+                   : h + "0 0 0 1 2 3 0\n0 0 0 1 2 3 " + value + "\n";
+}
+
+// Issue 24: `uchar 300`, `-1`, `ushort 70000` were accepted (300 became a colour of 1.18).
+TEST(PlyHostile, AsciiIntegersOutsideTheirDeclaredTypeAreErrors) {
+  const std::pair<const char*, const char*> bad[] = {
+      {"uchar", "300"},    {"uchar", "-1"},       {"uchar", "256"},       {"ushort", "70000"},
+      {"ushort", "-1"},    {"char", "128"},       {"char", "-129"},       {"short", "32768"},
+      {"short", "-32769"}, {"int", "2147483648"}, {"uint", "4294967296"}, {"uint", "-1"}};
+  for (const auto& [type, value] : bad) {
+    for (const bool as_colour : {true, false}) {
+      const std::string t = type;
+      if (as_colour && t != "uchar" && t != "ushort") continue;  // not colour types
+      SCOPED_TRACE(t + " " + value + (as_colour ? " colour" : " extra"));
+      const std::string e = error_of(ascii_value(type, value, as_colour));
+      EXPECT_NE(e.find(std::string("t.ply: PLY: vertex 1 (line ") + (as_colour ? "12" : "13") +
+                       "): property '" + (as_colour ? "red" : "q") + "' " + value +
+                       " is out of range for " + type),
+                std::string::npos)
+          << e;
+    }
+  }
+  // The limits themselves are values of their type.
+  EXPECT_EQ(error_of(ascii_value("uchar", "255", true)), "");
+  EXPECT_EQ(error_of(ascii_value("ushort", "65535", true)), "");
+  for (const auto& [type, value] : {std::pair<const char*, const char*>{"char", "-128"},
+                                    {"short", "-32768"},
+                                    {"int", "-2147483648"},
+                                    {"uint", "4294967295"}}) {
+    EXPECT_EQ(error_of(ascii_value(type, value, false)), "") << type;
+  }
+}
+
+TEST(PlyHostile, AsciiListLengthsAndIndicesOutsideTheirTypeAreErrors) {
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n";
+  std::string e = error_of(head + "256 0 1 2\n");
+  EXPECT_NE(e.find("face 0 (line 13): list length of 'vertex_indices' 256 is out of range for "
+                   "uchar (0..255)"),
+            std::string::npos)
+      << e;
+  e = error_of(head + "3 0 -1 2\n");
+  EXPECT_NE(e.find("face 0 (line 13): item of 'vertex_indices' -1 is out of range for uint"),
+            std::string::npos)
+      << e;
+  e = error_of(head + "3 0 1.5 2\n");
+  EXPECT_NE(e.find("'1.5' is not an integer (uint)"), std::string::npos) << e;
+}
+
+Builder float_colours(double odd_value) {
+  Builder b;
+  b.color_type = "float";
+  for (int i = 0; i < 200; ++i) b.vertices.push_back({double(i), double(i % 7), 0, 0.5, 0.25, 1});
+  b.vertices[3][4] = odd_value;
+  return b;
+}
+
+// Issue 24: one value of 1.0000001 switched the whole file to 0..255 without a word.
+TEST(PlyHostile, FloatColourScaleIsReportedWhenFewValuesDecideAndCanBeChosen) {
+  const std::string bytes = float_colours(1.0000001).bytes();
+  const Content automatic = parse(bytes, "t.ply");
+  EXPECT_EQ(automatic.colors[0].r, 1 / 255.0);  // MEPP2's rule kept by default: 0.5 -> 1/255
+  ASSERT_EQ(automatic.warnings.size(), 1u);
+  EXPECT_EQ(automatic.warnings[0],
+            "t.ply: 1 of 600 colour values above 1 (max 1.0000001): read as 0..255 like the "
+            "reference; --colour-scale unit reads them as 0..1");
+
+  const Content unit = parse(bytes, "t.ply", AsciiFloat::kDouble, ColourScale::kUnit);
+  EXPECT_EQ(unit.colors[0].r, 0.5);
+  EXPECT_EQ(unit.colors[3].g, 1.0);  // clamped
+  ASSERT_EQ(unit.warnings.size(), 1u);
+  EXPECT_NE(unit.warnings[0].find("clamped to 1"), std::string::npos);
+
+  const Content byte =
+      parse(float_colours(0.5).bytes(), "t.ply", AsciiFloat::kDouble, ColourScale::kByte);
+  EXPECT_EQ(byte.colors[0].b, 1 / 255.0);
+  EXPECT_TRUE(byte.warnings.empty());
+}
+
+TEST(PlyHostile, ClearColourScalesGiveNoWarning) {
+  EXPECT_TRUE(parse(float_colours(0.75).bytes(), "t.ply").warnings.empty());  // all 0..1
+  Builder b = float_colours(0.75);
+  for (auto& v : b.vertices) v[3] = 200;  // a 0..255 file: a third of its values above 1
+  const Content c = parse(b.bytes(), "t.ply");
+  EXPECT_TRUE(c.warnings.empty());
+  EXPECT_EQ(c.colors[0].r, 200 / 255.0);
+}
+
+Builder far_cloud(const std::string& pos_type, Format format, double offset) {
+  Builder b;
+  b.format = format;
+  b.pos_type = pos_type;
+  b.faces.clear();
+  for (int i = 0; i < 100; ++i) {  // a 1 x 1 grid of 10 x 10 points, spacing 0.1
+    b.vertices.push_back({offset + 0.1 * (i % 10), 0.1 * (i / 10), 0, 1, 2, 3});
+  }
+  return b;
+}
+
+// Issue 24: coordinates declared float at an offset of 1e7 lose their detail (the float32 step
+// there is 1, the points are 0.1 apart) without a word.
+TEST(PlyHostile, Float32RoundingLargeAgainstTheSpacingIsAWarning) {
+  const Content binary =
+      parse(far_cloud("float", Format::kBinaryLittleEndian, 1e7).bytes(), "t.ply");
+  ASSERT_EQ(binary.warnings.size(), 1u);
+  EXPECT_NE(binary.warnings[0].find("t.ply: coordinates stored as float32: at |coordinate| "
+                                    "10000001 the float32 step is 1, more than 1/8 of the "
+                                    "typical point spacing"),
+            std::string::npos)
+      << binary.warnings[0];
+  // ASCII read as declared (clouds) rounds too; the double parse (meshes) keeps the detail.
+  const std::string ascii = far_cloud("float", Format::kAscii, 1e7).bytes();
+  EXPECT_EQ(parse(ascii, "t.ply", AsciiFloat::kAsDeclared).warnings.size(), 1u);
+  EXPECT_TRUE(parse(ascii, "t.ply", AsciiFloat::kDouble).warnings.empty());
+  // Declared double, or near the origin: nothing to say.
+  EXPECT_TRUE(parse(far_cloud("double", Format::kBinaryLittleEndian, 1e7).bytes(), "t.ply")
+                  .warnings.empty());
+  EXPECT_TRUE(
+      parse(far_cloud("float", Format::kBinaryLittleEndian, 0).bytes(), "t.ply").warnings.empty());
+  // At 1e5 the step (1/128) is below 1/8 of the spacing (0.1 x 1.41 / 10): still fine.
+  EXPECT_TRUE(parse(far_cloud("float", Format::kBinaryLittleEndian, 1e5).bytes(), "t.ply")
+                  .warnings.empty());
+}
+
+// Issue 24: after setlocale(LC_ALL, "de_DE.UTF-8") (Python's locale.setlocale) strtod stopped at
+// the '.', so ASCII PLY clouds failed to parse.
+TEST(PlyHostile, NumbersAreParsedAndWrittenTheSameInACommaDecimalLocale) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("qm3d_ply_locale_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    QM3D_WITH_COMMA_LOCALE(comma, dir);
+    Builder b = triangle();
+    for (AsciiFloat f : {AsciiFloat::kDouble, AsciiFloat::kAsDeclared}) {
+      const Content c = parse(b.bytes(), "t.ply", f);
+      EXPECT_EQ(c.positions[0][0], 0.5);
+      EXPECT_EQ(c.positions[0][1], -1.25);
+    }
+    b.color_type = "float";
+    b.vertices[0][3] = 0.75;
+    EXPECT_EQ(parse(b.bytes(), "t.ply").colors[0].r, std::floor(0.75 + 0.5) / 255.0);
+    WriteData d;
+    d.format = Format::kAscii;
+    d.positions = {{0.5, 1.25, 2}};
+    d.scalar_names = {"distortion"};
+    d.scalars = {0.25f};
+    write(dir / "out.ply", d);
+    std::ifstream in(dir / "out.ply");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("0.5 1.25 2 0.25\n"), std::string::npos) << text;
   }
   std::filesystem::remove_all(dir);
 }

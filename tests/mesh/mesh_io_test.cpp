@@ -124,5 +124,74 @@ TEST_F(MeshFiles, VerticesOnlyReadingAcceptsAFacelessFile) {
   EXPECT_EQ(c.size(), 2u);
 }
 
+// ---- issue 24 ----------------------------------------------------------------------------------
+
+// `v x y z w r g b` was read as the colour (w, r, g). 3, 4 and 6 values are read; 5, 7 and 8+ are
+// errors naming the file and line (7 could be x y z w r g b or x y z r g b a).
+TEST_F(MeshFiles, ObjVertexValueCountsOtherThan3_4_6AreErrors) {
+  const std::string face = "v 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n";
+  EXPECT_EQ(error_of(write("six.obj", "v 0 0 0 0.5 0.5 0.5\n" + face)), "");
+  const MeshFile four = read_mesh(write("four.obj", "v 0 0 0 2\nv 1 0 0 2\nv 0 1 0 2\nf 1 2 3\n"),
+                                  MeshReadOptions{false});
+  EXPECT_EQ(four.mesh.positions[1], (Vec3{1, 0, 0}));  // w ignored
+  EXPECT_TRUE(four.mesh.colors.empty());
+  const std::pair<const char*, const char*> bad[] = {
+      {"v 0 0 0 1 0.5\n", "line 1: a vertex with 5 values"},
+      {"v 0 0 0 1 0.5 0.5 0.5\n",
+       "line 1: a vertex with 7 values (qm3d reads 'v x y z', "
+       "'v x y z w' and 'v x y z r g b'; 7 values could be x y z w r "
+       "g b or x y z r g b a)"},
+      {"v 0 0 0 1 0.5 0.5 0.5 1\n", "line 1: a vertex with 8 or more values"},
+      {"v 0 0 0 1 0.5 0.5 0.5 1 2 3\n", "line 1: a vertex with 8 or more values"}};
+  for (const auto& [line, message] : bad) {
+    const std::string e = error_of(write("bad.obj", line + face));
+    EXPECT_NE(e.find((dir_ / "bad.obj").string() + ": " + message), std::string::npos) << e;
+  }
+}
+
+std::string colour_obj(const std::string& odd) {
+  std::string text;
+  for (int i = 0; i < 100; ++i) {
+    text += "v " + std::to_string(i) + " " + std::to_string(i % 3) + " 0 0.5 " +
+            (i == 5 ? odd : std::string("0.25")) + " 1\n";
+  }
+  for (int i = 1; i + 2 <= 100; ++i) {
+    text +=
+        "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+  }
+  return text;
+}
+
+// One value of 1.0000001 switched the whole file to 0..255 (every colour near black) silently.
+TEST_F(MeshFiles, ObjAndOffColourScaleIsReportedAndCanBeChosen) {
+  const fs::path obj = write("c.obj", colour_obj("1.0000001"));
+  const MeshFile automatic = read_mesh(obj);
+  EXPECT_EQ(automatic.mesh.colors[0].r, double(float(1 / 255.0)));  // MEPP2's rule by default
+  ASSERT_EQ(automatic.warnings.size(), 1u);
+  EXPECT_EQ(automatic.warnings[0], obj.string() +
+                                       ": 1 of 300 colour values above 1 (max "
+                                       "1.0000001): read as 0..255 like the reference; "
+                                       "--colour-scale unit reads them as 0..1");
+  MeshReadOptions unit;
+  unit.colour_scale = ColourScale::kUnit;
+  const MeshFile chosen = read_mesh(obj, unit);
+  EXPECT_EQ(chosen.mesh.colors[0].r, 0.5);
+  EXPECT_EQ(chosen.mesh.colors[5].g, 1.0);
+  // The same choice for a mesh read as a cloud (its vertices).
+  ReadOptions cloud_unit;
+  cloud_unit.colour_scale = ColourScale::kUnit;
+  const CloudData vertices = read_mesh_vertices_data(obj, MeshFormat::kObj, cloud_unit);
+  EXPECT_EQ(vertices.cloud.colors[0].r, 0.5);
+  ASSERT_EQ(vertices.warnings.size(), 1u);
+  EXPECT_NE(vertices.warnings[0].find("clamped to 1 (--colour-scale unit)"), std::string::npos);
+  // A clear 0..1 file, and a COFF in 0..255, need no word.
+  EXPECT_TRUE(read_mesh(write("u.obj", colour_obj("0.75"))).warnings.empty());
+  const MeshFile off = read_mesh(write("c.off",
+                                       "COFF\n3 1 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n"
+                                       "3 0 1 2\n"));
+  EXPECT_TRUE(off.warnings.empty());
+  EXPECT_EQ(off.mesh.colors[1].g, 1.0);
+}
+
 }  // namespace
 }  // namespace qm3d::mesh

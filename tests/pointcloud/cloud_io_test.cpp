@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 
+#include "comma_locale.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/ply.h"
 #include "qm3d/pointcloud/pcqm.h"
@@ -302,6 +304,180 @@ TEST(ReadCloudErrors, PcdHeaderClaimingTooManyPoints) {
                                      "TYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2147483647\nHEIGHT 1\n"
                                      "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2147483647\nDATA ascii\n0 0 0 1\n";
   expect_error_mentioning<FormatError>(dir / "huge.pcd", "too short");
+}
+
+// ---- issue 24: hostile PCD and PLY clouds ------------------------------------------------------
+
+std::string pcd_header(const std::string& fields, const std::string& size, const std::string& type,
+                       const std::string& count, std::size_t points,
+                       const std::string& data = "ascii") {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + size + "\nTYPE " + type +
+         "\nCOUNT " + count + "\nWIDTH " + std::to_string(points) +
+         "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 "
+         "0 0\nPOINTS " +
+         std::to_string(points) + "\nDATA " + data + "\n";
+}
+
+std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+// 0xC86432 = (200, 100, 50).
+const std::string kXyzRgb = pcd_header("x y z rgb", "4 4 4 4", "F F F U", "1 1 1 1", 2);
+
+TEST(ReadCloudHostile, AsciiPcdLinesWithAValueTooManyOrTooFewAreErrorsNamingTheLine) {
+  const auto dir = temp_dir("pcd_columns");
+  expect_error_mentioning<FormatError>(
+      write_file(dir / "many.pcd", kXyzRgb + "0.5 1.5 2.5 13132850\n0.5 1.5 2.5 13132850 7\n"),
+      "line 13: 5 values, but FIELDS and COUNT declare 4");
+  expect_error_mentioning<FormatError>(
+      write_file(dir / "few.pcd", kXyzRgb + "0.5 1.5 2.5\n0.5 1.5 2.5 13132850\n"),
+      "line 12: 3 values, but FIELDS and COUNT declare 4");
+  expect_error_mentioning<FormatError>(
+      write_file(dir / "word.pcd", kXyzRgb + "0.5 1.5 abc 13132850\n0.5 1.5 2.5 13132850\n"),
+      "line 12: 'abc' (value 3) is not a number");
+}
+
+TEST(ReadCloudHostile, AsciiPcdPointsDisagreeingWithTheDataAreErrors) {
+  const auto dir = temp_dir("pcd_points");
+  const std::string line = "0.5 1.5 2.5 13132850\n";
+  expect_error_mentioning<FormatError>(write_file(dir / "more.pcd", kXyzRgb + line + line + line),
+                                       "line 14: more points than POINTS 2 declares");
+  expect_error_mentioning<FormatError>(write_file(dir / "fewer.pcd", kXyzRgb + line + "\n\n"),
+                                       "PCD data ends after 1 of the 2 points");
+  // Blank lines and CRLF line ends are no points.
+  const ColoredCloud c = read_cloud(write_file(dir / "crlf.pcd", kXyzRgb +
+                                                                     "\n0.5 1.5 2.5 "
+                                                                     "13132850\r\n\n" +
+                                                                     line));
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[1], (Vec3{0.5, 1.5, 2.5}));
+  EXPECT_EQ(c.colors[1].r, 200 / 255.0);
+  EXPECT_EQ(c.colors[1].b, 50 / 255.0);
+}
+
+TEST(ReadCloudHostile, PcdCountAboveOneTakesThatManyColumns) {
+  const auto dir = temp_dir("pcd_count");
+  // x, y, z and rgb hold one value each: a COUNT of 2 is refused, in any encoding.
+  expect_error_mentioning<FormatError>(
+      write_file(dir / "rgb2.pcd", pcd_header("x y z rgb", "4 4 4 4", "F F F U", "1 1 1 2", 1) +
+                                       "0.5 1.5 2.5 13132850 0\n"),
+      "PCD field 'rgb' has COUNT 2");
+  expect_error_mentioning<FormatError>(
+      write_file(dir / "rgb2b.pcd",
+                 pcd_header("x y z rgb", "4 4 4 4", "F F F U", "1 1 1 2", 1, "binary") +
+                     std::string(20, '\0')),
+      "PCD field 'rgb' has COUNT 2");
+  // Another field of COUNT 3 takes three columns.
+  const ColoredCloud c = read_cloud(write_file(
+      dir / "normal.pcd", pcd_header("x normal y z rgb", "4 4 4 8 4", "F F F F F", "1 3 1 1 1", 1) +
+                              "0.5 9 9 9 1.5 2.25 1.84030425e-38\n"));
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_EQ(c.positions[0], (Vec3{0.5, 1.5, 2.25}));
+  EXPECT_EQ(c.colors[0].r, 200 / 255.0);  // a float rgb: its bits are 0x00C86432
+  EXPECT_EQ(c.colors[0].g, 100 / 255.0);
+}
+
+// PCL pads binary files with zeros (up to a page): those are no points; other bytes are.
+TEST(ReadCloudHostile, BinaryPcdWithDataAfterItsPointsIsAnError) {
+  const auto dir = temp_dir("pcd_trailing");
+  const auto pcl_cloud = to_pcl(head(cloud(kRefFile), 100));
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "full.pcd").string(), pcl_cloud), 0);
+  std::filesystem::copy_file(dir / "full.pcd", dir / "long.pcd");
+  std::ofstream(dir / "long.pcd", std::ios::app | std::ios::binary) << std::string(16, '\1');
+  expect_error_mentioning<FormatError>(dir / "long.pcd", "holds more data after them");
+  EXPECT_EQ(read_cloud(dir / "full.pcd").size(), 100u);
+}
+
+// Patches the 4-byte compressed (at 0) or uncompressed (at 4) size of a binary_compressed PCD.
+void patch_compressed_size(const std::filesystem::path& path, int at, std::uint32_t value) {
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::size_t data = text.find("DATA binary_compressed\n") + 23;
+  f.seekp(static_cast<std::streamoff>(data + at));
+  f.write(reinterpret_cast<const char*>(&value), 4);
+}
+
+// Issue 24: a header claiming 4 GB uncompressed made PCL allocate 8.4 GB before its error.
+TEST(ReadCloudHostile, CompressedPcdSizesAreCheckedBeforeAnythingIsAllocated) {
+  const auto dir = temp_dir("pcd_lzf");
+  const auto pcl_cloud = to_pcl(head(cloud(kRefFile), 100));
+  ASSERT_EQ(pcl::io::savePCDFileBinaryCompressed((dir / "ok.pcd").string(), pcl_cloud), 0);
+  EXPECT_EQ(read_cloud(dir / "ok.pcd").size(), 100u);
+  std::filesystem::copy_file(dir / "ok.pcd", dir / "huge.pcd");
+  patch_compressed_size(dir / "huge.pcd", 4, 0xFFFFFFF0u);
+  expect_error_mentioning<FormatError>(
+      dir / "huge.pcd", "claims 4294967280 bytes uncompressed, but POINTS 100 x 16 bytes");
+  std::filesystem::copy_file(dir / "ok.pcd", dir / "long.pcd");
+  patch_compressed_size(dir / "long.pcd", 0, 0x7FFFFFFFu);
+  expect_error_mentioning<FormatError>(dir / "long.pcd", "claims 2147483647 compressed bytes");
+}
+
+// Issue 24: after setlocale(LC_ALL, "de_DE.UTF-8") ASCII PCD was read with y = z = 0, and
+// ASCII PLY clouds did not parse.
+TEST(ReadCloudHostile, CommaDecimalLocaleChangesNoNumber) {
+  const auto dir = temp_dir("pcd_locale");
+  const ColoredCloud small = head(cloud(kRefFile), 300);
+  const auto pcl_cloud = to_pcl(small);
+  ASSERT_EQ(pcl::PCDWriter().writeASCII((dir / "ascii.pcd").string(), pcl_cloud, 9), 0);
+  ASSERT_EQ(pcl::io::savePCDFileBinary((dir / "binary.pcd").string(), pcl_cloud), 0);
+  ply::WriteData ascii = write_data(small);
+  ascii.format = ply::Format::kAscii;
+  ply::write(dir / "ascii.ply", ascii);
+  QM3D_WITH_COMMA_LOCALE(comma, dir);
+  for (const char* name : {"ascii.pcd", "binary.pcd", "ascii.ply"}) {
+    SCOPED_TRACE(name);
+    expect_same_cloud(read_cloud(dir / name), small);
+  }
+}
+
+TEST(ReadCloudHostile, FloatCoordinatesFarFromTheOriginAreAWarning) {
+  const auto dir = temp_dir("pcd_far");
+  std::string far = pcd_header("x y z rgb", "4 4 4 4", "F F F U", "1 1 1 1", 100);
+  std::string near = far, as_double = pcd_header("x y z rgb", "8 8 8 4", "F F F U", "1 1 1 1", 100);
+  for (int i = 0; i < 100; ++i) {  // a 1 x 1 grid of points 0.1 apart
+    const std::string yz = " " + std::to_string(0.1 * (i / 10)) + " 0 13132850\n";
+    far += std::to_string(1e7 + 0.1 * (i % 10)) + yz;
+    as_double += std::to_string(1e7 + 0.1 * (i % 10)) + yz;
+    near += std::to_string(0.1 * (i % 10)) + yz;
+  }
+  const CloudData d = read_cloud_data(write_file(dir / "far.pcd", far), CloudFormat::kPcd);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  EXPECT_NE(d.warnings[0].find("far.pcd: coordinates stored as float32: at |coordinate| 10000001 "
+                               "the float32 step is 1"),
+            std::string::npos)
+      << d.warnings[0];
+  EXPECT_TRUE(
+      read_cloud_data(write_file(dir / "near.pcd", near), CloudFormat::kPcd).warnings.empty());
+  EXPECT_TRUE(read_cloud_data(write_file(dir / "double.pcd", as_double), CloudFormat::kPcd)
+                  .warnings.empty());
+}
+
+TEST(ReadCloudHostile, PlyFloatColourScaleIsAnOptionWithAWarning) {
+  const auto dir = temp_dir("ply_scale");
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 100\nproperty float x\nproperty float "
+      "y\nproperty float z\nproperty float red\nproperty float green\nproperty float "
+      "blue\nend_header\n";
+  for (int i = 0; i < 100; ++i) {
+    text += std::to_string(i) + " " + std::to_string(i % 3) + " 0 0.5 " +
+            (i == 7 ? "1.0000001" : "0.25") + " 1\n";
+  }
+  const auto path = write_file(dir / "c.ply", text);
+  const CloudData automatic = read_cloud_data(path, CloudFormat::kPly);
+  EXPECT_EQ(automatic.cloud.colors[0].r, 1 / 255.0);  // the reference's rule
+  ASSERT_EQ(automatic.warnings.size(), 1u);
+  // (1.0000001 as float32: clouds read ASCII `float` values as the reference does)
+  EXPECT_EQ(automatic.warnings[0], path.string() +
+                                       ": 1 of 300 colour values above 1 (max "
+                                       "1.0000001192092896): read as 0..255 like the reference; "
+                                       "--colour-scale unit reads them as 0..1");
+  ReadOptions unit;
+  unit.colour_scale = ColourScale::kUnit;
+  const CloudData chosen = read_cloud_data(path, CloudFormat::kPly, unit);
+  EXPECT_EQ(chosen.cloud.colors[0].r, 0.5);
+  EXPECT_EQ(chosen.cloud.colors[7].g, 1.0);
 }
 
 }  // namespace

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "qm3d/common/reading.h"
 #include "qm3d/common/result.h"
 #include "qm3d/common/types.h"
 
@@ -61,8 +62,10 @@ class Input {
  public:
   enum class Kind { kMesh, kCloud };
 
-  /// A file; its kind is recognised now (from its header), its content read when first used.
-  static Input from_file(const std::filesystem::path& path, const Registry& registry);
+  /// A file; its kind is recognised now (from its header), its content read when first used
+  /// (as `options` say: the scale of float colours).
+  static Input from_file(const std::filesystem::path& path, const Registry& registry,
+                         const ReadOptions& options = {});
   /// A mesh in memory (`name` appears in results and messages).
   static Input from_mesh(ColoredMesh mesh, std::string name, bool has_colors = true);
   /// A mesh in memory with its reader's warnings (e.g. mesh/mesh_io.h mesh_from_arrays).
@@ -82,6 +85,8 @@ class Input {
   /// The cloud: a cloud's points, or a mesh's vertices (every vertex of the file, colours
   /// required).
   const ColoredCloud& cloud() const;
+  /// What the reader of cloud() warned of (empty for data in memory); reads the cloud.
+  std::vector<std::string> cloud_warnings() const;
   /// Reads now what `kind` needs (so that two inputs can be read concurrently).
   void load(Kind as) const;
   /// Frees what was read from the file (it is read again if used later); data given in memory
@@ -94,14 +99,15 @@ class Input {
   std::shared_ptr<State> state_;
 };
 
-/// What the modules register to read inputs.
+/// What the modules register to read inputs (with the reader's warnings).
 struct Readers {
   /// A mesh file (OBJ, OFF, PLY) of the given format; colours kept when present.
-  std::function<MeshData(const std::filesystem::path&, FileFormat)> mesh;
+  std::function<MeshData(const std::filesystem::path&, FileFormat, const ReadOptions&)> mesh;
   /// Every vertex of a mesh file (OBJ, OFF) as a cloud.
-  std::function<ColoredCloud(const std::filesystem::path&, FileFormat)> mesh_vertices;
+  std::function<CloudData(const std::filesystem::path&, FileFormat, const ReadOptions&)>
+      mesh_vertices;
   /// A cloud file (PLY, PCD); a PLY mesh gives its vertices.
-  std::function<ColoredCloud(const std::filesystem::path&, FileFormat)> cloud;
+  std::function<CloudData(const std::filesystem::path&, FileFormat, const ReadOptions&)> cloud;
 };
 
 /// How a surface is sampled into a cloud (mesh/sampling.h): `points` samples, or `density` per
@@ -192,8 +198,10 @@ class Registry {
   /// The surface sampler; std::logic_error when no module registered one.
   const SurfaceSampler& sampler() const;
 
-  /// Input::from_file(path, *this).
-  Input read(const std::filesystem::path& path) const { return Input::from_file(path, *this); }
+  /// Input::from_file(path, *this, options).
+  Input read(const std::filesystem::path& path, const ReadOptions& options = {}) const {
+    return Input::from_file(path, *this, options);
+  }
 
  private:
   std::vector<MetricSpec> metrics_;
@@ -203,7 +211,8 @@ class Registry {
 
 /// Runs a metric: checks and completes the options, reads both inputs (concurrently unless
 /// run.threads == 1), computes, and fills the result's provenance (input names; seconds include
-/// the reading). Errors of the computation name both inputs.
+/// the reading). Errors of the computation name both inputs. A metric that reads clouds gets the
+/// cloud readers' warnings before its own (mesh metrics add their readers' themselves).
 MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
                         const RunOptions& run, const OptionValues& options = {});
 

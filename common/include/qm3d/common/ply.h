@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "qm3d/common/reading.h"
 #include "qm3d/common/types.h"
 
 namespace qm3d::ply {
@@ -47,14 +48,18 @@ enum class ColorEncoding { kNone, kUint8, kUint16, kFloat };
 /// What qm3d takes from a PLY file.
 struct Content {
   std::vector<Vec3> positions;
-  /// Colours in [0, 1] at double precision (uchar / 255, ushort / 65535; float colours are kept,
-  /// or divided by 255 when any exceeds 1, as MEPP2 does). Empty when there are none.
+  /// Colours in [0, 1] at double precision (uchar / 255, ushort / 65535; float colours as the
+  /// ColourScale says: by default kept, or read as 0..255 when any exceeds 1, as MEPP2 does).
+  /// Empty when there are none.
   std::vector<Rgb> colors;
   ColorEncoding color_encoding = ColorEncoding::kNone;
   /// Faces as polygons in compressed form: face f has vertices
   /// face_indices[face_offsets[f] .. face_offsets[f + 1]). face_offsets has #F + 1 entries.
   std::vector<std::uint32_t> face_offsets{0};
   std::vector<std::uint32_t> face_indices;
+  /// What the reader could not keep silent: a colour scale chosen on thin evidence, coordinates
+  /// rounded to float32 against their spacing (reading.h). Each line names the file.
+  std::vector<std::string> warnings;
 };
 
 /// Parses the header of `bytes` (the file's content); `name` is used in error messages. When
@@ -74,12 +79,16 @@ enum class AsciiFloat {
 };
 
 /// Reads the vertex positions, colours and faces of a PLY file. Throws InputError / FormatError
-/// naming the file on any problem (truncation, bad values, face index out of range, ...).
-Content read(const std::filesystem::path& path, AsciiFloat ascii_float = AsciiFloat::kDouble);
+/// naming the file on any problem (truncation, bad values, an ASCII integer outside its declared
+/// type's range (`uchar 300`, naming element, line and value), face index out of range, ...).
+/// Numbers are parsed the same whatever the C locale.
+Content read(const std::filesystem::path& path, AsciiFloat ascii_float = AsciiFloat::kDouble,
+             ColourScale colour_scale = ColourScale::kAuto);
 
 /// Reads PLY content already in memory.
 Content parse(const std::string& bytes, const std::string& name,
-              AsciiFloat ascii_float = AsciiFloat::kDouble);
+              AsciiFloat ascii_float = AsciiFloat::kDouble,
+              ColourScale colour_scale = ColourScale::kAuto);
 
 /// What to write: positions, optional 8-bit colours, optional float scalar per vertex, faces.
 struct WriteData {

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "qm3d/common/reading.h"
 #include "qm3d/common/types.h"
 
 namespace qm3d::pointcloud {
@@ -14,7 +15,11 @@ namespace qm3d::pointcloud {
 ///   keep their exact value); colours uchar, ushort or float named red/green/blue, r/g/b or
 ///   diffuse_red/green/blue (see qm3d/common/ply.h). Faces, normals and alpha are ignored.
 /// - `.pcd`: ascii, binary or binary_compressed; fields x, y, z (float or double) and a packed
-///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB).
+///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB), each of COUNT 1
+///   (other fields may have any COUNT: a field of COUNT n takes n ASCII columns). An ASCII line
+///   with a value too many or too few, data beyond POINTS or fewer points than it, a binary file
+///   whose size is not POINTS records, and compressed data whose sizes disagree with POINTS are
+///   FormatErrors naming the file (and the line).
 ///
 /// Colours are returned in [0, 1] at double precision; an 8-bit channel u becomes u / 255.0,
 /// exactly as MEPP-team/PCQM converts its colours.
@@ -25,6 +30,9 @@ namespace qm3d::pointcloud {
 /// @throws FormatError  unknown extension, malformed content, or no colours
 ///                      ("<file>: no vertex colours ...")
 ///
+/// Numbers are parsed the same whatever the C locale. The reader's warnings (read_cloud_data)
+/// are dropped here.
+///
 /// \bug OBJ and OFF meshes are not read here (the mesh reader will provide their vertices).
 /// \bug Points with non-finite coordinates (e.g. organised PCD clouds) are returned as they are;
 ///      compute_pcqm rejects them.
@@ -33,5 +41,11 @@ ColoredCloud read_cloud(const std::filesystem::path& path);
 enum class CloudFormat { kPly, kPcd };
 /// read_cloud with the format given (e.g. recognised by content) instead of the extension.
 ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format);
+
+/// read_cloud with the reader's options (the scale of PLY float colours) and its warnings: a
+/// colour scale chosen on thin evidence, float32 coordinates whose rounding is large against
+/// the point spacing (qm3d/common/reading.h). What the metric registry's cloud reader returns.
+CloudData read_cloud_data(const std::filesystem::path& path, CloudFormat format,
+                          const ReadOptions& options = {});
 
 }  // namespace qm3d::pointcloud
