@@ -42,5 +42,36 @@ TEST(DegenerateMesh, AFaceRepeatedTensOfThousandsOfTimesScoresZeroAgainstItself)
   }
 }
 
+ColoredMesh scaled(ColoredMesh m, double factor) {
+  for (auto& p : m.positions) {
+    for (double& x : p) x *= factor;
+  }
+  return m;
+}
+
+bool warns_of_short_edges(const MetricResult& r) {
+  for (const auto& w : r.warnings) {
+    if (w.find("edges are shorter than 1.5e-8") != std::string::npos) return true;
+  }
+  return false;
+}
+
+// MEPP2's curvature has an absolute epsilon (curvature.h, kClipEpsilon): reproduced, and said
+// when the mesh is small enough for it to matter (blob4 scaled by 1e-8: edges of ~1e-10).
+TEST(DegenerateMesh, MeshesSmallEnoughForMeppsAbsoluteEpsilonAreWarnedAbout) {
+  const auto dir = test::reference_dir() / "cmdm";
+  const ColoredMesh ref = read_mesh(dir / "blob4_ref.off").mesh;
+  const ColoredMesh dist = read_mesh(dir / "blob4_geonoise.off").mesh;
+  CmdmOptions o;
+  o.scales = 1;
+  EXPECT_FALSE(warns_of_short_edges(compute_cmdm(ref, dist, o)));
+  EXPECT_FALSE(warns_of_short_edges(compute_cmdm(scaled(ref, 1e-3), scaled(dist, 1e-3), o)));
+  const MetricResult tiny = compute_cmdm(scaled(ref, 1e-8), scaled(dist, 1e-8), o);
+  EXPECT_TRUE(warns_of_short_edges(tiny));
+  Msdm2Options m;
+  m.scales = 1;
+  EXPECT_TRUE(warns_of_short_edges(compute_msdm2(scaled(ref, 1e-8), scaled(dist, 1e-8), m)));
+}
+
 }  // namespace
 }  // namespace qm3d::mesh
