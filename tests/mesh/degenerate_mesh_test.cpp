@@ -3,7 +3,9 @@
 // bites. Each mesh is made here; none is written to disk.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "qm3d/mesh/cmdm.h"
@@ -39,6 +41,54 @@ TEST(DegenerateMesh, AFaceRepeatedTensOfThousandsOfTimesScoresZeroAgainstItself)
     const ColoredMesh m = repeated_triangle(kCopies, shared);
     EXPECT_EQ(compute_cmdm(m, m).score, 0.0);
     EXPECT_EQ(compute_msdm2(m, m).score, 0.0);
+  }
+}
+
+// A coloured disc: one polygon of `corners` corners on the unit circle, as an OFF file's text.
+std::string disc_off(std::uint32_t corners) {
+  std::ostringstream off;
+  off.precision(17);
+  off << "COFF\n" << corners << " 1 0\n";
+  for (std::uint32_t i = 0; i < corners; ++i) {
+    const double a = 2 * M_PI * i / corners;
+    off << std::cos(a) << ' ' << std::sin(a) << " 0 " << i % 256 << ' ' << (7 * i) % 256
+        << " 128 255\n";
+  }
+  off << corners;
+  for (std::uint32_t i = 0; i < corners; ++i) off << ' ' << i;
+  off << '\n';
+  return off.str();
+}
+
+std::size_t largest_valence(const ColoredMesh& m) {
+  std::vector<std::size_t> faces(m.positions.size(), 0);
+  for (const auto& t : m.triangles) {
+    for (auto v : t) ++faces[v];
+  }
+  return *std::max_element(faces.begin(), faces.end());
+}
+
+// A 20,000-corner polygon was a fan of slivers from corner 0 (20,000 faces on one vertex: N^2
+// connectivity, N^2 closest points, and a 100k-corner disc scored 6.3e-4 against itself; 1e5
+// corners crashed). Now halves: every corner in a few faces, and the disc scores ~0 (as MEPP2's
+// formula does on identical meshes: rounding, not exactly 0) against itself.
+TEST(DegenerateMesh, APolygonOfTensOfThousandsOfCornersIsTriangulatedByHalves) {
+  constexpr std::uint32_t kCorners = 20000;
+  const MeshFile disc = parse_mesh(disc_off(kCorners), MeshFormat::kOff, "disc.off");
+  ASSERT_EQ(disc.mesh.triangles.size(), kCorners - 2);
+  EXPECT_LE(largest_valence(disc.mesh), 2 * 15u + 2);  // 2 log2(N) + 2
+  ASSERT_FALSE(disc.warnings.empty());
+  EXPECT_NE(disc.warnings.back().find("triangulated by halves"), std::string::npos);
+  EXPECT_LT(std::fabs(compute_cmdm(disc.mesh, disc.mesh).score), 1e-15);
+  EXPECT_LT(std::fabs(compute_msdm2(disc.mesh, disc.mesh).score), 1e-15);
+}
+
+// Polygons up to kMaxFanCorners corners keep their fan, and so their scores.
+TEST(DegenerateMesh, SmallerPolygonsKeepTheirFan) {
+  const MeshFile disc = parse_mesh(disc_off(1000), MeshFormat::kOff, "disc.off");
+  ASSERT_EQ(disc.mesh.triangles.size(), 998u);
+  for (std::uint32_t k = 0; k < 998; ++k) {
+    EXPECT_EQ(disc.mesh.triangles[k], (Triangle{0, k + 1, k + 2}));
   }
 }
 
