@@ -403,8 +403,9 @@ void check_thread_count(int threads) {
   if (threads < 0) throw std::invalid_argument("threads: must be 0 (all cores) or more");
   if (threads > max_threads()) {
     throw std::invalid_argument("threads: " + std::to_string(threads) + " is more than the " +
-                                std::to_string(max_threads()) + " this machine allows (" +
-                                std::to_string(kThreadsPerCore) + " per core; 0 = all cores)");
+                                std::to_string(max_threads()) + " qm3d runs on this machine (" +
+                                std::to_string(kThreadsPerCore) + " per core, at least " +
+                                std::to_string(kMinThreadLimit) + "; 0 = all cores)");
   }
 }
 
