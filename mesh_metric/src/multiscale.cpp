@@ -12,6 +12,7 @@
 #include "halfedge_mesh.h"
 #include "neighbourhood.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
 
 namespace qm3d::mesh::detail {
 namespace {
@@ -207,6 +208,7 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
     throw std::invalid_argument(std::string(def.name) +
                                 ": the number of scales must be between 1 and 100");
   }
+  check_thread_count(run.threads);  // libgomp crashes on tens of thousands
   const bool both = run.direction == Direction::kSymmetric;
   // Steps of about equal cost: preparing, then per direction its matching and each scale.
   ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + run.scales));

@@ -7,11 +7,12 @@
 
 #include "pcqm_internal.h"
 #include "pcqm_spec.h"
-#include "qm3d/pointcloud/metrics.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/version.h"
+#include "qm3d/pointcloud/metrics.h"
 
 namespace qm3d::pointcloud {
 namespace {
@@ -34,15 +35,16 @@ void require(bool ok, const std::string& message) {
 
 void validate(const PcqmOptions& o) {
   require(o.radius_rel >= kMinRadiusRel && o.radius_rel <= kMaxRadiusRel,
-          "radius_rel must be in [" + number(kMinRadiusRel) + ", " + number(kMaxRadiusRel) +
+          "radius_rel must be in [" + number(kMinRadiusRel, 6) + ", " + number(kMaxRadiusRel, 6) +
               "] (a fraction of the bounding box), got " + number(o.radius_rel));
   require(o.knn >= 1, "knn must be at least 1, got " + std::to_string(o.knn));
   require(o.radius_factor >= kMinRadiusFactor && o.radius_factor <= kMaxRadiusFactor,
-          "radius_factor must be in [" + number(kMinRadiusFactor) + ", " +
-              number(kMaxRadiusFactor) + "], got " + number(o.radius_factor));
+          "radius_factor must be in [" + number(kMinRadiusFactor, 6) + ", " +
+              number(kMaxRadiusFactor, 6) + "], got " + number(o.radius_factor));
   require(o.threads >= 0,
           "threads must be 0 (OpenMP default) or positive, got " + std::to_string(o.threads));
   require(o.bbox == BboxMode::kReference || o.bbox == BboxMode::kExtent, "unknown bbox mode");
+  check_thread_count(o.threads);  // libgomp crashes on tens of thousands
 }
 
 void validate(const ColoredCloud& cloud, const std::string& name) {

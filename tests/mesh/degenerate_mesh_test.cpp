@@ -92,6 +92,17 @@ TEST(DegenerateMesh, SmallerPolygonsKeepTheirFan) {
   }
 }
 
+// The library refuses thread counts libgomp cannot start, also when called directly.
+TEST(DegenerateMesh, AbsurdThreadCountsAreRefusedByTheMeshMetrics) {
+  const ColoredMesh m = repeated_triangle(1, true);
+  CmdmOptions c;
+  c.threads = 65536;
+  EXPECT_THROW(compute_cmdm(m, m, c), std::invalid_argument);
+  Msdm2Options s;
+  s.threads = 1000000;
+  EXPECT_THROW(compute_msdm2(m, m, s), std::invalid_argument);
+}
+
 ColoredMesh scaled(ColoredMesh m, double factor) {
   for (auto& p : m.positions) {
     for (double& x : p) x *= factor;

@@ -587,6 +587,7 @@ TEST(PcqmErrors, BadOptionsAreRejected) {
   EXPECT_THROW(with([](PcqmOptions& o) { o.knn = 0; })(), std::invalid_argument);
   EXPECT_THROW(with([](PcqmOptions& o) { o.radius_factor = 0; })(), std::invalid_argument);
   EXPECT_THROW(with([](PcqmOptions& o) { o.threads = -1; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.threads = 65536; })(), std::invalid_argument);
   expect_error_mentioning<std::invalid_argument>(with([](PcqmOptions& o) { o.knn = -3; }),
                                                  "knn must be at least 1, got -3");
 }
