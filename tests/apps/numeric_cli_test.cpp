@@ -3,6 +3,7 @@
 // meaningful range. Each is a one-line error and a non-zero exit, never a signal, a NaN score
 // with exit 0 or an empty output file.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <sstream>
@@ -18,9 +19,11 @@ using test::CliRun;
 class NumericCli : public ::testing::Test {
  protected:
   void SetUp() override {
+    // The process id keeps concurrent runs (several build trees) out of each other's way.
     dir_ = fs::temp_directory_path() /
            (std::string("qm3d_numeric_") +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+            ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+            std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "cwd");
   }
