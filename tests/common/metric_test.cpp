@@ -268,7 +268,8 @@ TEST(RunMetric, RefusesCoordinatesWhoseSquaresOverflowOrUnderflow) {
   for (const double side : {1e-100, 1e-300}) {
     const Input tiny = Input::from_cloud(cloud_of({1, 1 + side}), "tiny.ply");
     const Input tiny_at_0 = Input::from_cloud(cloud_of({0, side}), "tiny.ply");
-    EXPECT_NO_THROW(run_metric(s, good, tiny, run));  // 1 + 1e-100 == 1: zero size, left to the metric
+    // 1 + 1e-100 == 1: a box of zero size, left to the metric's own check.
+    EXPECT_NO_THROW(run_metric(s, good, tiny, run));
     const std::string e = error_of([&] { run_metric(s, good, tiny_at_0, run); });
     EXPECT_EQ(e.rfind("tiny.ply: the bounding box's longest side is ", 0), 0u) << e;
     EXPECT_NE(e.find("squared distances would underflow"), std::string::npos) << e;
