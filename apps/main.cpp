@@ -256,6 +256,7 @@ int run(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   }
 
+  check_thread_count(global.threads);  // before libgomp is asked for that many
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   if (const auto code = run_sample_commands(*sample_commands)) return *code;

@@ -6,7 +6,9 @@
 #include <cstring>
 #include <fstream>
 #include <future>
+#include <locale>
 #include <sstream>
+#include <thread>
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
@@ -414,6 +416,112 @@ std::vector<std::string> cloud_reader_warnings(const Input& reference, const Inp
 
 }  // namespace
 
+int max_threads() {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  return std::max(kMinThreadLimit, static_cast<int>(std::min(cores, 1u << 20)) * kThreadsPerCore);
+}
+
+void check_thread_count(int threads) {
+  if (threads < 0) throw std::invalid_argument("threads: must be 0 (all cores) or more");
+  if (threads > max_threads()) {
+    throw std::invalid_argument("threads: " + std::to_string(threads) + " is more than the " +
+                                std::to_string(max_threads()) + " qm3d runs on this machine (" +
+                                std::to_string(kThreadsPerCore) + " per core, at least " +
+                                std::to_string(kMinThreadLimit) + "; 0 = all cores)");
+  }
+}
+
+namespace {
+
+std::string short_number(double x) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << x;
+  return out.str();
+}
+
+}  // namespace
+
+void check_coordinate_range(const std::vector<Vec3>& positions, const std::string& name) {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  bool any = false;
+  for (const Vec3& p : positions) {
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = any ? std::min(lo[k], p[k]) : p[k];
+      hi[k] = any ? std::max(hi[k], p[k]) : p[k];
+    }
+    any = true;
+  }
+  if (!any) return;
+  double largest = 0, side = 0;
+  for (int k = 0; k < 3; ++k) {
+    largest = std::max({largest, std::abs(lo[k]), std::abs(hi[k])});
+    side = std::max(side, hi[k] - lo[k]);
+  }
+  if (largest > kMaxCoordinate) {
+    throw NumericError(name + ": coordinates up to " + short_number(largest) +
+                       " are too large: squared distances would overflow (the metrics need "
+                       "|x|, |y|, |z| <= " +
+                       short_number(kMaxCoordinate) + "; rescale the data)");
+  }
+  if (side > 0 && side < kMinBoxSide) {
+    throw NumericError(name + ": the bounding box's longest side is " + short_number(side) +
+                       ", too small: squared distances would underflow (the metrics need at "
+                       "least " +
+                       short_number(kMinBoxSide) + "; rescale the data)");
+  }
+}
+
+namespace {
+
+void check_model(const RunOptions& run) {
+  if (!run.model) return;
+  for (std::size_t k = 0; k < run.model->weights.size(); ++k) {
+    if (!std::isfinite(run.model->weights[k])) {
+      throw std::invalid_argument("weights: weight " + std::to_string(k + 1) + " of " +
+                                  std::to_string(run.model->weights.size()) + " is " +
+                                  short_number(run.model->weights[k]) + " (must be finite)");
+    }
+  }
+}
+
+const std::vector<Vec3>& positions_of(const Input& in, Input::Kind as) {
+  return as == Input::Kind::kMesh ? in.mesh().mesh.positions : in.cloud().positions;
+}
+
+// Where a direction's score or pooled features are not finite: "score nan", "f3 inf"; empty
+// when all are.
+std::string non_finite_value(const DirectionResult& d, const std::vector<std::string>& names) {
+  if (!std::isfinite(d.score)) return "score " + short_number(d.score);
+  for (std::size_t k = 0; k < d.features.size(); ++k) {
+    if (std::isfinite(d.features[k])) continue;
+    const std::string feature = k < names.size() ? names[k] : "feature " + std::to_string(k + 1);
+    return feature + " " + short_number(d.features[k]);
+  }
+  return {};
+}
+
+// A metric never reports a non-finite score as a result: NumericError naming the metric, the
+// direction and the value.
+void check_finite_result(const MetricSpec& spec, const MetricResult& r) {
+  const auto check = [&](const std::optional<DirectionResult>& d, Direction which) {
+    if (!d) return;
+    const std::string bad = non_finite_value(*d, r.feature_names);
+    if (bad.empty()) return;
+    throw NumericError(spec.title + ": the " + direction_name(which) + " " + bad +
+                       " is not finite (degenerate data or options: e.g. a radius so small that "
+                       "no neighbour is within it)");
+  };
+  check(r.dist_to_ref, Direction::kDistToRef);
+  check(r.ref_to_dist, Direction::kRefToDist);
+  if (!std::isfinite(r.score)) {
+    throw NumericError(spec.title + ": the score " + short_number(r.score) + " is not finite");
+  }
+}
+
+}  // namespace
+
 MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
                         const RunOptions& run, const OptionValues& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -421,6 +529,8 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
   if (run.model && !spec.takes_model) {
     throw std::invalid_argument(spec.name + " has no linear model: --weights / --model do not apply");
   }
+  check_thread_count(run.threads);
+  check_model(run);
   // Both inputs are read concurrently unless one thread was asked for.
   auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
                              [&] { reference.load(spec.reads); });
@@ -432,7 +542,10 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
                                                : std::vector<std::string>();
   MetricResult result;
   try {
+    check_coordinate_range(positions_of(reference, spec.reads), reference.name());
+    check_coordinate_range(positions_of(distorted, spec.reads), distorted.name());
     result = spec.run(spec, reference, distorted, run, values);
+    check_finite_result(spec, result);
   } catch (const NumericError& e) {
     throw NumericError(e.what() + std::string(" (reference ") + reference.name() +
                        ", distorted " + distorted.name() + ")");

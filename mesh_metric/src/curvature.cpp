@@ -74,10 +74,22 @@ double post_process(const double tensor[3][3], double maxdim) {
 
 }  // namespace
 
+std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
+  std::size_t count = 0;
+  for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
+    for (std::uint32_t k = mesh.rings.begin(v); k < mesh.rings.end(v); ++k) {
+      const std::uint32_t w = mesh.rings.source[k];
+      const Vec3 e = sub(mesh.positions[w], mesh.positions[v]);
+      if (w > v && std::fabs(dot(e, e)) < kClipEpsilon) ++count;
+    }
+  }
+  return count;
+}
+
 bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v) {
   const Vec3 w = sub(p, o);
   const double a = dot(v, v);
-  if (std::fabs(a) < std::numeric_limits<double>::epsilon()) return false;
+  if (std::fabs(a) < kClipEpsilon) return false;
   const double b = 2.0 * dot(v, w);
   const double c = dot(w, w) - r * r;
   const double delta = b * b - 4. * a * c;

@@ -2,6 +2,8 @@
 // MEPP2 implements it), post-processed into one scalar per vertex. Internal.
 #pragma once
 
+#include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "halfedge_mesh.h"
@@ -23,6 +25,17 @@ enum class CurvatureVariant {
 /// Parallel over vertices with `threads` OpenMP threads; the result does not depend on them.
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
                                         CurvatureVariant variant, int threads);
+
+/// The absolute epsilon of MEPP2's sphere_clip_vector: an edge vector whose squared length is
+/// below it is taken as inside the sphere, whatever the radius (MEPP2 commit d977d05,
+/// FEVV/Operators/Geometry/ClippingAndIntersection.hpp, `fabs(a) < epsilon` on a = v . v; the
+/// curvature of both CMDM, curvature_cmdm.hpp, and MSDM2, Manifold/Curvature/curvature.hpp,
+/// goes through it). Reproduced, so the curvature features are not scale-invariant on meshes
+/// with edges shorter than sqrt(epsilon) = 1.5e-8 (in the mesh's units).
+constexpr double kClipEpsilon = std::numeric_limits<double>::epsilon();
+
+/// The number of edges shorter than sqrt(kClipEpsilon), each counted once.
+std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh);
 
 /// MEPP2's sphere_clip_vector (ClippingAndIntersection.hpp): clips `v`, starting at `p`, to the
 /// sphere (o, r). Returns true when the segment crosses the sphere ("isect").

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "halfedge_mesh.h"
+#include "polygon_triangulation.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
@@ -299,12 +300,12 @@ std::vector<Rgb> vertex_colors(const RawMesh& m, const std::string& file, Colour
   return out;
 }
 
-// Fan-triangulates polygons; checks indices.
+// Triangulates polygons (polygon_triangulation.h); checks indices.
 std::vector<Triangle> triangulate(const RawMesh& m, const std::string& file,
                                   std::vector<std::string>& warnings) {
   std::vector<Triangle> tris;
   tris.reserve(m.face_offsets.size());
-  std::size_t polygons = 0;
+  std::size_t polygons = 0, large = 0;
   for (std::size_t f = 0; f + 1 < m.face_offsets.size(); ++f) {
     const std::uint32_t begin = m.face_offsets[f], end = m.face_offsets[f + 1];
     if (end - begin < 3) fail(file, "face " + std::to_string(f) + " has fewer than 3 vertices");
@@ -316,13 +317,22 @@ std::vector<Triangle> triangulate(const RawMesh& m, const std::string& file,
       }
     }
     if (end - begin > 3) ++polygons;
-    for (std::uint32_t k = begin + 1; k + 1 < end; ++k) {
-      tris.push_back({m.face_indices[begin], m.face_indices[k], m.face_indices[k + 1]});
-    }
+    if (end - begin > detail::kMaxFanCorners) ++large;
+    const std::uint32_t* corner = &m.face_indices[begin];
+    detail::triangulate_polygon(end - begin,
+                                [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+                                  tris.push_back({corner[a], corner[b], corner[c]});
+                                });
   }
-  if (polygons > 0) {
-    warnings.push_back(file + ": " + std::to_string(polygons) +
+  if (polygons > large) {
+    warnings.push_back(file + ": " + std::to_string(polygons - large) +
                        " polygons with more than 3 vertices were fan-triangulated");
+  }
+  if (large > 0) {
+    warnings.push_back(file + ": " + std::to_string(large) + " polygons with more than " +
+                       std::to_string(detail::kMaxFanCorners) +
+                       " vertices were triangulated by halves (a fan of so many slivers is "
+                       "degenerate)");
   }
   return tris;
 }

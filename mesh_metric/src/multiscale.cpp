@@ -8,9 +8,11 @@
 #include <optional>
 #include <stdexcept>
 
+#include "curvature.h"
 #include "halfedge_mesh.h"
 #include "neighbourhood.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
 
 namespace qm3d::mesh::detail {
 namespace {
@@ -47,6 +49,18 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
   return lab;
 }
 
+// MEPP2's curvature ignores edges shorter than 1.5e-8 whatever the mesh's size (kClipEpsilon):
+// reproduced, and said, since the curvature features then depend on the mesh's scale.
+void warn_small_edges(HalfedgeMesh& m, const std::string& name) {
+  const std::size_t edges = edges_under_clip_epsilon(m);
+  if (edges == 0) return;
+  m.warnings.push_back(name + ": " + std::to_string(edges) +
+                       " edges are shorter than 1.5e-8 (the mesh's units): MEPP2's curvature "
+                       "takes them as inside every neighbourhood (an absolute epsilon, "
+                       "reproduced), so the curvature features are not scale-invariant here; "
+                       "scale both meshes up (e.g. to a bounding box of about 1)");
+}
+
 PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
                      const MultiscaleDefinition& def, int threads) {
   PreparedMesh p;
@@ -56,6 +70,7 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
+  warn_small_edges(p.mesh, name);
   return p;
 }
 
@@ -193,6 +208,7 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
     throw std::invalid_argument(std::string(def.name) +
                                 ": the number of scales must be between 1 and 100");
   }
+  check_thread_count(run.threads);  // libgomp crashes on tens of thousands
   const bool both = run.direction == Direction::kSymmetric;
   // Steps of about equal cost: preparing, then per direction its matching and each scale.
   ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + run.scales));

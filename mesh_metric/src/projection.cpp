@@ -1,12 +1,13 @@
 #include "projection.h"
 
 #include <CGAL/AABB_tree/internal/AABB_search_tree.h>
-#include <boost/iterator/counting_iterator.hpp>
-#include <boost/iterator/transform_iterator.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <optional>
 
 #include "cgal_mesh.h"
@@ -37,42 +38,110 @@ std::array<double, 3> heron_areas(const HalfedgeMesh& mesh, std::uint32_t face, 
   return {heron_area(p1, l1, t3, t2), heron_area(p2, l2, t3, t1), heron_area(p3, l3, t1, t2)};
 }
 
+// CGAL's k-d tree (Kd_tree::create_internal_node, Sliding_midpoint) splits a node whose points
+// all coincide by sliding one point off (Point_container::split), so a group of k equal hints
+// makes a chain k levels deep: 256 bytes of stack a level in the build, and its search recurses
+// as deep. 60,000 copies of one face overflow an 8 MB stack. Up to this many coincident hints
+// the tree gets the hints exactly as MEPP2's does (the same tree, the same answers, ties
+// included); past it (MEPP2 itself recurses tens of thousands of levels there, and crashes) only
+// the first hint of each group of equal points, so that the tree is never deeper than its
+// distinct points make it.
+constexpr std::size_t kMaxCoincidentHints = 1024;
+
+// Groups of hints at equal positions. Hints are given as vertices (key[e] for hint e); for each
+// hint, the group it is in, whether it is its group's first, and the size of the largest group.
+class CoincidentHints {
+ public:
+  CoincidentHints(const ArrayView<Vec3>& positions, const std::vector<std::uint32_t>& key) {
+    const std::vector<std::uint32_t> first_vertex = first_coincident(positions);
+    std::vector<std::uint32_t> first_hint(positions.size(), kNone), count(positions.size(), 0);
+    group_.resize(key.size());
+    for (std::uint32_t e = 0; e < key.size(); ++e) {
+      const std::uint32_t g = first_vertex[key[e]];
+      group_[e] = g;
+      if (first_hint[g] == kNone) first_hint[g] = e;
+      largest_ = std::max<std::size_t>(largest_, ++count[g]);
+    }
+    first_.resize(key.size());
+    shared_.resize(key.size());
+    for (std::uint32_t e = 0; e < key.size(); ++e) {
+      first_[e] = first_hint[group_[e]] == e;
+      shared_[e] = count[group_[e]] > 1;
+    }
+  }
+
+  std::size_t largest() const { return largest_; }
+  bool first(std::uint32_t e) const { return first_[e] != 0; }
+  /// Another hint is at the same position.
+  bool shared(std::uint32_t e) const { return shared_[e] != 0; }
+
+ private:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+
+  // For each vertex, the smallest index of a vertex at the same position.
+  static std::vector<std::uint32_t> first_coincident(const ArrayView<Vec3>& positions) {
+    std::vector<std::uint32_t> order(positions.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return positions[a] < positions[b] || (positions[a] == positions[b] && a < b);
+    });
+    std::vector<std::uint32_t> first(positions.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const bool starts = i == 0 || !(positions[order[i - 1]] == positions[order[i]]);
+      first[order[i]] = starts ? order[i] : first[order[i - 1]];
+    }
+    return first;
+  }
+
+  std::vector<std::uint32_t> group_;
+  std::vector<char> first_, shared_;
+  std::size_t largest_ = 0;
+};
+
 // The closest-point search starts from a hint: a point on the mesh and its face, the nearest of
 // a set of samples in CGAL's k-d tree. When a query projects onto an edge or a vertex, the hint
 // decides which of the equidistant faces is reported. MSDM2 measures its Heron distances from
 // the off-surface query, so that choice moves its score (by 6e-5 on blob4_geonoise): it gets
 // CGAL's default samples exactly as MEPP2's tree takes them (one per face, its first corner, in
 // face order). CMDM interpolates at the projected point, where the tied faces agree, and gets one
-// sample per vertex instead (its first face), found by NearestPointIndex: the same hint as CGAL's
-// k-d tree wherever the nearest sample is unique; where another is exactly as near (coincident
-// vertices), CGAL's k-d tree, built on first need, decides.
+// sample per vertex instead (its first face), found by NearestPointIndex on the distinct
+// positions: the same hint as CGAL's k-d tree wherever the nearest sample is unique; where
+// another is exactly as near (a coincident vertex, or another at the same distance), CGAL's k-d
+// tree, built on first need, decides. Groups of coincident samples larger than
+// kMaxCoincidentHints are given to CGAL's tree as their first sample only.
 class SearchHints {
  public:
   SearchHints(const HalfedgeMesh& target, HeronAnchor anchor, int threads) : target_(target) {
     if (anchor == HeronAnchor::kQueryPoint) {
-      const auto to_hint = [&](std::uint32_t f) {
-        return Hint(to_point(target.positions[target.triangles[f][0]]), f);
-      };
-      const boost::counting_iterator<std::uint32_t> first(0);
-      const boost::counting_iterator<std::uint32_t> last(
-          static_cast<std::uint32_t>(target.triangles.size()));
-      cgal_ = std::make_unique<HintTree>(boost::make_transform_iterator(first, to_hint),
-                                         boost::make_transform_iterator(last, to_hint));
+      std::vector<std::uint32_t> faces(target.triangles.size()), corners(faces.size());
+      std::iota(faces.begin(), faces.end(), 0u);
+      for (std::uint32_t f = 0; f < faces.size(); ++f) corners[f] = target.triangles[f][0];
+      cgal_ = cgal_hints(corners, faces);
       return;
     }
     const std::vector<std::uint32_t> faces = vertex_faces();
-    std::vector<std::uint32_t> vertices;
     for (std::uint32_t v = 0; v < faces.size(); ++v) {
-      if (faces[v] != kNone) vertices.push_back(v);
+      if (faces[v] != kNone) vertices_.push_back(v);
     }
-    index_.emplace(target.positions, vertices, faces, threads);
+    groups_.emplace(target.positions, vertices_);
+    std::vector<std::uint32_t> distinct, hint_of(faces.size(), 0);
+    for (std::uint32_t e = 0; e < vertices_.size(); ++e) {
+      hint_of[vertices_[e]] = e;
+      if (groups_->first(e)) distinct.push_back(vertices_[e]);
+    }
+    index_.emplace(target.positions, distinct, hint_of, threads);
+    vertex_face_ = faces;
   }
 
   ClosestPoint operator()(const Vec3& q) const {
     if (index_) {
       const NearestPointIndex::Nearest n = index_->nearest(q);
-      if (!n.tie) return {n.point, n.id};
-      std::call_once(cgal_built_, [this] { cgal_ = cgal_vertex_hints(); });
+      if (!n.tie && !groups_->shared(n.id)) return {n.point, vertex_face_[vertices_[n.id]]};
+      std::call_once(cgal_built_, [this] {
+        std::vector<std::uint32_t> faces(vertices_.size());
+        for (std::size_t e = 0; e < faces.size(); ++e) faces[e] = vertex_face_[vertices_[e]];
+        cgal_ = cgal_hints(vertices_, faces);
+      });
     }
     const Hint h = cgal_->closest_point(to_point(q));
     return {{h.first.x(), h.first.y(), h.first.z()}, h.second};
@@ -92,28 +161,112 @@ class SearchHints {
     return face;
   }
 
-  // CGAL's k-d tree of the vertex samples, given in vertex order.
-  std::unique_ptr<HintTree> cgal_vertex_hints() const {
-    const std::vector<std::uint32_t> faces = vertex_faces();
+  // CGAL's k-d tree of the hints (the position of vertex corners[e], face faces[e]) in their
+  // order; only the first of each group of equal positions when a group is too large.
+  std::unique_ptr<HintTree> cgal_hints(const std::vector<std::uint32_t>& corners,
+                                       const std::vector<std::uint32_t>& faces) const {
+    const CoincidentHints groups(target_.positions, corners);
+    const bool all = groups.largest() <= kMaxCoincidentHints;
     std::vector<Hint> hints;
-    for (std::uint32_t v = 0; v < faces.size(); ++v) {
-      if (faces[v] != kNone) hints.emplace_back(to_point(target_.positions[v]), faces[v]);
+    hints.reserve(corners.size());
+    for (std::uint32_t e = 0; e < corners.size(); ++e) {
+      if (all || groups.first(e))
+        hints.emplace_back(to_point(target_.positions[corners[e]]), faces[e]);
     }
     return std::make_unique<HintTree>(hints.begin(), hints.end());
   }
 
   const HalfedgeMesh& target_;
+  std::vector<std::uint32_t> vertices_;     ///< CMDM: the vertices with a face, in order
+  std::vector<std::uint32_t> vertex_face_;  ///< CMDM: the first face of each vertex
+  std::optional<CoincidentHints> groups_;   ///< CMDM: the coincident groups of vertices_
   std::optional<NearestPointIndex> index_;
   mutable std::once_flag cgal_built_;
   mutable std::unique_ptr<HintTree> cgal_;
 };
+
+// Faces repeated (the same corner positions in the same order) more than this many times go
+// into the closest-point tree once: a query on such a face visits every copy (each copy's box
+// reaches it and none is pruned), n^2 work for n copies of a face and n queries on it. Below it
+// the tree holds every face, as MEPP2's does.
+constexpr std::size_t kMaxRepeatedFaces = 1024;
+
+// The faces the closest-point tree holds: every face of the mesh (`all`), or the first copy of
+// each geometry, with the mesh's face of each tree face and the tree face of each mesh face.
+struct TreeFaces {
+  bool all = true;
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> mesh_face;
+  std::vector<std::uint32_t> tree_face;
+};
+
+std::array<double, 9> corners_of(const HalfedgeMesh& m, std::uint32_t f) {
+  const Triangle& t = m.triangles[f];
+  const Vec3 &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
+  return {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]};
+}
+
+// The size of the largest set of faces with one geometry, bounded above by the largest set with
+// one hash of it (equal geometries hash alike): the exact count is needed only past the bound.
+std::size_t largest_hash_run(const HalfedgeMesh& m) {
+  std::vector<std::uint64_t> hashes(m.triangles.size());
+  for (std::uint32_t f = 0; f < hashes.size(); ++f) {
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the coordinates' bits
+    for (double x : corners_of(m, f)) {
+      std::uint64_t bits;
+      x = x == 0 ? 0.0 : x;  // -0 and +0 are the same coordinate
+      std::memcpy(&bits, &x, sizeof bits);
+      h = (h ^ bits) * 1099511628211ull;
+    }
+    hashes[f] = h;
+  }
+  std::sort(hashes.begin(), hashes.end());
+  std::size_t largest = 0;
+  for (std::size_t i = 0, run = 0; i < hashes.size(); ++i) {
+    run = i > 0 && hashes[i] == hashes[i - 1] ? run + 1 : 1;
+    largest = std::max(largest, run);
+  }
+  return largest;
+}
+
+TreeFaces tree_faces(const HalfedgeMesh& m) {
+  TreeFaces out;
+  if (largest_hash_run(m) <= kMaxRepeatedFaces) return out;
+  std::vector<std::uint32_t> order(m.triangles.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return corners_of(m, a) < corners_of(m, b);
+  });
+  std::vector<std::uint32_t> first(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const bool starts = i == 0 || corners_of(m, order[i - 1]) != corners_of(m, order[i]);
+    first[order[i]] = starts ? order[i] : first[order[i - 1]];
+  }
+  out.all = false;
+  out.tree_face.resize(order.size());
+  for (std::uint32_t f = 0; f < order.size(); ++f) {
+    if (first[f] == f) {
+      out.tree_face[f] = static_cast<std::uint32_t>(out.triangles.size());
+      out.triangles.push_back(m.triangles[f]);
+      out.mesh_face.push_back(f);
+    } else {
+      out.tree_face[f] = out.tree_face[first[f]];
+    }
+  }
+  return out;
+}
 
 }  // namespace
 
 SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
                                 HeronAnchor anchor, int threads) {
   const SearchHints hints(target, anchor, threads);
-  const FaceBoxTree tree(target.positions, target.triangles, threads);
+  const TreeFaces faces = tree_faces(target);
+  const FaceBoxTree tree(target.positions,
+                         faces.all
+                             ? target.triangles
+                             : ArrayView<Triangle>{faces.triangles.data(), faces.triangles.size()},
+                         threads);
   SurfaceMatches out;
   out.points.resize(queries.size());
   out.matches.resize(queries.size());
@@ -121,7 +274,15 @@ SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMe
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
   for (std::int64_t i = 0; i < n; ++i) {
     const Vec3& v = queries[std::size_t(i)];
-    const ClosestPoint c = tree.closest(v, hints(v));
+    ClosestPoint c;
+    if (faces.all) {
+      c = tree.closest(v, hints(v));
+    } else {
+      ClosestPoint hint = hints(v);
+      hint.face = faces.tree_face[hint.face];
+      c = tree.closest(v, hint);
+      c.face = faces.mesh_face[c.face];
+    }
     out.points[std::size_t(i)] = c.point;
     SurfaceMatch& m = out.matches[std::size_t(i)];
     m.face = c.face;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <locale>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "qm3d/common/error.h"
@@ -112,6 +114,14 @@ ColoredCloud build_cloud(const ColoredMesh& mesh, const std::vector<SurfacePoint
   return cloud;
 }
 
+// %g-style, locale-independent: 1e+19, 3.14159.
+std::string short_number(double x) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out << x;
+  return out.str();
+}
+
 }  // namespace
 
 std::size_t sample_count(const SamplingOptions& options, double total_area) {
@@ -119,15 +129,29 @@ std::size_t sample_count(const SamplingOptions& options, double total_area) {
   if (by_points == by_density) {
     throw NumericError("surface sampling: set exactly one of points and density");
   }
-  if (by_points) return options.points;
+  if (by_points) {
+    if (options.points > kMaxSamples) {
+      throw NumericError("surface sampling: " + std::to_string(options.points) +
+                         " points are more than the " + std::to_string(kMaxSamples) +
+                         " one sampling draws");
+    }
+    return options.points;
+  }
   if (!(options.density > 0) || !std::isfinite(options.density)) {
-    throw NumericError("surface sampling: density " + std::to_string(options.density) +
+    throw NumericError("surface sampling: density " + short_number(options.density) +
                        " is not a positive number");
   }
   const double count = std::round(options.density * total_area);
   if (!(count >= 1)) {
-    throw NumericError("surface sampling: density " + std::to_string(options.density) +
-                       " gives no point on an area of " + std::to_string(total_area));
+    throw NumericError("surface sampling: density " + short_number(options.density) +
+                       " gives no point on an area of " + short_number(total_area));
+  }
+  // Compared as doubles: a count past 2^64 must not wrap round when converted.
+  if (!(count <= static_cast<double>(kMaxSamples))) {
+    throw NumericError("surface sampling: density " + short_number(options.density) + " gives " +
+                       short_number(count) + " points on an area of " + short_number(total_area) +
+                       ", more than the " + std::to_string(kMaxSamples) +
+                       " one sampling draws (lower the density)");
   }
   return static_cast<std::size_t>(count);
 }

@@ -9,6 +9,7 @@
 #include <memory>
 #include <tuple>
 
+#include "polygon_triangulation.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "text_lines.h"
@@ -175,15 +176,18 @@ std::vector<std::uint32_t> load_textures(const ObjTexturing& t, const std::files
   return polygon_texture;
 }
 
-// Fan-triangulates the corner UVs exactly as read_mesh fan-triangulates the polygons.
+// Triangulates the corner UVs exactly as read_mesh triangulates the polygons.
 void triangulate_uvs(const ObjTexturing& t, const std::vector<std::uint32_t>& polygon_texture,
                      TexturedMesh& out) {
   for (std::size_t p = 0; p + 1 < t.polygon_offsets.size(); ++p) {
     const std::uint32_t begin = t.polygon_offsets[p], end = t.polygon_offsets[p + 1];
-    for (std::uint32_t k = begin + 1; k + 1 < end; ++k) {
-      out.triangle_uvs.push_back({t.corner_uvs[begin], t.corner_uvs[k], t.corner_uvs[k + 1]});
-      out.triangle_texture.push_back(polygon_texture[p]);
-    }
+    if (end - begin < 3) continue;  // read_mesh refuses such a face
+    const std::uint32_t* uv = &t.corner_uvs[begin];
+    detail::triangulate_polygon(end - begin,
+                                [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+                                  out.triangle_uvs.push_back({uv[a], uv[b], uv[c]});
+                                  out.triangle_texture.push_back(polygon_texture[p]);
+                                });
   }
 }
 

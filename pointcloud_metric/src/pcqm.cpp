@@ -7,11 +7,12 @@
 
 #include "pcqm_internal.h"
 #include "pcqm_spec.h"
-#include "qm3d/pointcloud/metrics.h"
 #include "qm3d/common/color.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/version.h"
+#include "qm3d/pointcloud/metrics.h"
 
 namespace qm3d::pointcloud {
 namespace {
@@ -33,14 +34,17 @@ void require(bool ok, const std::string& message) {
 }
 
 void validate(const PcqmOptions& o) {
-  require(std::isfinite(o.radius_rel) && o.radius_rel > 0,
-          "radius_rel must be positive and finite, got " + number(o.radius_rel));
+  require(o.radius_rel >= kMinRadiusRel && o.radius_rel <= kMaxRadiusRel,
+          "radius_rel must be in [" + number(kMinRadiusRel, 6) + ", " + number(kMaxRadiusRel, 6) +
+              "] (a fraction of the bounding box), got " + number(o.radius_rel));
   require(o.knn >= 1, "knn must be at least 1, got " + std::to_string(o.knn));
-  require(std::isfinite(o.radius_factor) && o.radius_factor > 0,
-          "radius_factor must be positive and finite, got " + number(o.radius_factor));
+  require(o.radius_factor >= kMinRadiusFactor && o.radius_factor <= kMaxRadiusFactor,
+          "radius_factor must be in [" + number(kMinRadiusFactor, 6) + ", " +
+              number(kMaxRadiusFactor, 6) + "], got " + number(o.radius_factor));
   require(o.threads >= 0,
           "threads must be 0 (OpenMP default) or positive, got " + std::to_string(o.threads));
   require(o.bbox == BboxMode::kReference || o.bbox == BboxMode::kExtent, "unknown bbox mode");
+  check_thread_count(o.threads);  // libgomp crashes on tens of thousands
 }
 
 void validate(const ColoredCloud& cloud, const std::string& name) {
@@ -205,11 +209,12 @@ namespace detail {
 
 std::vector<OptionSpec> pcqm_option_specs() {
   const PcqmOptions d;
-  OptionSpec radius{"radius", "Curvature radius as a fraction of the bounding box", d.radius_rel,
-                    {}, 0, 1e300};
-  radius.min_exclusive = true;
-  OptionSpec rx{"rx", "Statistics radius = rx * curvature radius", d.radius_factor, {}, 0, 1e300};
-  rx.min_exclusive = true;
+  OptionSpec radius{"radius", "Curvature radius as a fraction of the bounding box", d.radius_rel};
+  radius.min = kMinRadiusRel;
+  radius.max = kMaxRadiusRel;
+  OptionSpec rx{"rx", "Statistics radius = rx * curvature radius", d.radius_factor};
+  rx.min = kMinRadiusFactor;
+  rx.max = kMaxRadiusFactor;
   return {radius,
           {"knn", "Neighbours of the quadric fit used for the correspondence", d.knn, {}, 1, 10000},
           rx,

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -222,6 +223,89 @@ TEST(RunMetric, ChecksOptionsFillsProvenanceAndNamesTheInputsInErrors) {
       << e;
   run.model = LinearModel{"toy", {}, "test"};
   EXPECT_THROW(run_metric(s, a, b, run), std::invalid_argument);  // the toy takes no model
+}
+
+// Thread counts libgomp cannot start (65536: SIGSEGV, 33000: abort) are refused up front.
+TEST(RunMetric, RefusesAbsurdThreadCountsWithTheLimit) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");
+  RunOptions run;
+  for (const int threads : {65536, 1000000, max_threads() + 1, -1}) {
+    run.threads = threads;
+    const std::string e = error_of([&] { run_metric(s, a, a, run); });
+    EXPECT_EQ(e.rfind("threads: ", 0), 0u) << e;
+    EXPECT_THROW(check_thread_count(threads), std::invalid_argument);
+  }
+  run.threads = max_threads();
+  EXPECT_NO_THROW(check_thread_count(run.threads));
+  EXPECT_GE(max_threads(), kMinThreadLimit);
+}
+
+TEST(RunMetric, RefusesNonFiniteWeights) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  MetricSpec with_model = s;
+  with_model.takes_model = true;
+  const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");
+  RunOptions run;
+  run.model = LinearModel{"toy", {1, std::nan(""), 0, 0, 0, 0, 0, 0}, "weights="};
+  const std::string e = error_of([&] { run_metric(with_model, a, a, run); });
+  EXPECT_EQ(e, "weights: weight 2 of 8 is nan (must be finite)");
+}
+
+// Coordinates whose squares overflow or underflow are refused before the metric runs, naming
+// the input and the limit.
+TEST(RunMetric, RefusesCoordinatesWhoseSquaresOverflowOrUnderflow) {
+  const MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const Input good = Input::from_cloud(cloud_of({0, 1}), "good.ply");
+  const RunOptions run;
+  for (const double x : {1e100, -1e300, 2e60}) {
+    const Input big = Input::from_cloud(cloud_of({0, x}), "big.ply");
+    const std::string e = error_of([&] { run_metric(s, good, big, run); });
+    EXPECT_EQ(e.rfind("big.ply: coordinates up to ", 0), 0u) << e;
+    EXPECT_NE(e.find("squared distances would overflow"), std::string::npos) << e;
+    EXPECT_THROW(run_metric(s, big, good, run), NumericError);
+  }
+  for (const double side : {1e-100, 1e-300}) {
+    const Input tiny = Input::from_cloud(cloud_of({1, 1 + side}), "tiny.ply");
+    const Input tiny_at_0 = Input::from_cloud(cloud_of({0, side}), "tiny.ply");
+    // 1 + 1e-100 == 1: a box of zero size, left to the metric's own check.
+    EXPECT_NO_THROW(run_metric(s, good, tiny, run));
+    const std::string e = error_of([&] { run_metric(s, good, tiny_at_0, run); });
+    EXPECT_EQ(e.rfind("tiny.ply: the bounding box's longest side is ", 0), 0u) << e;
+    EXPECT_NE(e.find("squared distances would underflow"), std::string::npos) << e;
+  }
+  const Input edge = Input::from_cloud(cloud_of({0, 1e60}), "edge.ply");
+  EXPECT_NO_THROW(run_metric(s, good, edge, run));
+  const Input small = Input::from_cloud(cloud_of({0, 1e-60}), "small.ply");
+  EXPECT_NO_THROW(run_metric(s, good, small, run));
+}
+
+// A metric that computes NaN never returns it as a score.
+TEST(RunMetric, ANonFiniteScoreOrFeatureIsANumericErrorNamingTheMetric) {
+  MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  s.title = "TOY";
+  const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");
+  const RunOptions run;
+  s.run = [](const MetricSpec&, const Input&, const Input&, const RunOptions&,
+             const OptionValues&) {
+    MetricResult r;
+    r.ref_to_dist = DirectionResult{std::nan(""), {}, 1, {}};
+    combine_directions(r);
+    return r;
+  };
+  std::string e = error_of([&] { run_metric(s, a, a, run); });
+  EXPECT_EQ(e.rfind("TOY: the ref-to-dist score nan is not finite", 0), 0u) << e;
+  s.run = [](const MetricSpec&, const Input&, const Input&, const RunOptions&,
+             const OptionValues&) {
+    MetricResult r;
+    r.feature_names = {"f1", "f2", "f3", "f4", "f5", "f6", "f7", "f8"};
+    r.dist_to_ref = DirectionResult{0.5, {0, 0, INFINITY, 0, 0, 0, 0, 0}, 1, {}};
+    combine_directions(r);
+    return r;
+  };
+  e = error_of([&] { run_metric(s, a, a, run); });
+  EXPECT_EQ(e.rfind("TOY: the dist-to-ref f3 inf is not finite", 0), 0u) << e;
+  EXPECT_NE(e.find("(reference a.ply, distorted a.ply)"), std::string::npos) << e;
 }
 
 TEST(OptionsFor, KeepsTheNamesTheMetricKnows) {

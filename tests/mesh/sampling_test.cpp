@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <string>
 
 #include "qm3d/common/error.h"
 
@@ -123,6 +124,30 @@ TEST(Sampling, InvalidRequestsThrow) {
   EXPECT_THROW(sample_surface(flat, {10, 0, 1}), NumericError);
   m.colors.clear();
   EXPECT_THROW(sample_surface(m, {10, 0, 1}), NumericError);
+}
+
+// A density whose count does not fit (1e19 per unit area on 55: 5.5e20 points, past 2^64) or
+// is past what one sampling draws is an error giving the count, never an empty cloud.
+TEST(Sampling, AbsurdDensitiesAndCountsAreRefusedWithTheCountTheyWouldGive) {
+  const ColoredMesh m = three_triangles({0, 0, 0});
+  for (const double density : {1e19, 1e300, 1e9}) {
+    try {
+      sample_count({0, density, 1}, 55);
+      ADD_FAILURE() << "no error for density " << density;
+    } catch (const NumericError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("points on an area of 55, more than the 1000000000"), std::string::npos)
+          << what;
+    }
+  }
+  try {
+    sample_surface(m, {0, 1e19, 1});
+    ADD_FAILURE() << "no error";
+  } catch (const NumericError& e) {
+    EXPECT_NE(std::string(e.what()).find("gives 5.5e+20 points"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(sample_count({kMaxSamples + 1, 0, 1}, 55), NumericError);
+  EXPECT_EQ(sample_count({kMaxSamples, 0, 1}, 55), kMaxSamples);
 }
 
 }  // namespace

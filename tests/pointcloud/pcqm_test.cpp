@@ -13,6 +13,7 @@
 #include "disposable_inputs.h"
 #include "kd_tree.h"
 #include "pcqm_internal.h"
+#include "pcqm_spec.h"
 #include "qm3d/common/error.h"
 #include "progress_recorder.h"
 #include "qm3d/common/pooling.h"
@@ -586,8 +587,39 @@ TEST(PcqmErrors, BadOptionsAreRejected) {
   EXPECT_THROW(with([](PcqmOptions& o) { o.knn = 0; })(), std::invalid_argument);
   EXPECT_THROW(with([](PcqmOptions& o) { o.radius_factor = 0; })(), std::invalid_argument);
   EXPECT_THROW(with([](PcqmOptions& o) { o.threads = -1; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.threads = 65536; })(), std::invalid_argument);
   expect_error_mentioning<std::invalid_argument>(with([](PcqmOptions& o) { o.knn = -3; }),
                                                  "knn must be at least 1, got -3");
+}
+
+// A radius of 1e-300 (its square underflows: NaN scores), NaN, or beyond any meaningful range is
+// refused where the options are checked, for the library and for the registry's option table
+// (the CLI's --radius and Python's radius=).
+TEST(PcqmErrors, RadiiOutsideTheirMeaningfulRangeAreRejected) {
+  const ColoredCloud c = head(cloud("sphere_50k_ref.ply"), 100);
+  auto with = [&](auto change) {
+    PcqmOptions o = test_options();
+    change(o);
+    return [o, &c] { compute_pcqm(c, c, o); };
+  };
+  expect_error_mentioning<std::invalid_argument>(
+      with([](PcqmOptions& o) { o.radius_rel = 1e-300; }), "radius_rel must be in [1e-06, 10]");
+  expect_error_mentioning<std::invalid_argument>(
+      with([](PcqmOptions& o) { o.radius_rel = std::nan(""); }), "got nan");
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_rel = 1e300; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_factor = 1e-300; })(), std::invalid_argument);
+  EXPECT_THROW(with([](PcqmOptions& o) { o.radius_factor = 1e300; })(), std::invalid_argument);
+  const std::vector<OptionSpec> specs = detail::pcqm_option_specs();
+  for (const OptionSpec& o : specs) {
+    if (o.name == "radius") {
+      EXPECT_EQ(o.min, kMinRadiusRel);
+      EXPECT_EQ(o.max, kMaxRadiusRel);
+    }
+    if (o.name == "rx") {
+      EXPECT_EQ(o.min, kMinRadiusFactor);
+      EXPECT_EQ(o.max, kMaxRadiusFactor);
+    }
+  }
 }
 
 TEST(PcqmErrors, MissingTablesAreAnInputError) {

@@ -209,10 +209,32 @@ class Registry {
   SurfaceSampler sampler_;
 };
 
+/// The most OpenMP threads a run may use: kThreadsPerCore per core the machine reports
+/// (std::thread::hardware_concurrency, 1 when unknown), and never fewer than kMinThreadLimit.
+/// libgomp aborts at about 33000 threads and crashes at 65536; no count near those helps.
+int max_threads();
+constexpr int kThreadsPerCore = 8;
+constexpr int kMinThreadLimit = 64;
+/// std::invalid_argument "threads: ..." unless 0 <= threads <= max_threads() (0 = all cores).
+void check_thread_count(int threads);
+
+/// Coordinates the metrics compute on safely: squared distances, and the fourth powers of
+/// PCQM's quadric fit, of coordinates up to kMaxCoordinate and of boxes down to kMinBoxSide stay
+/// normal doubles (1e-240 .. 1e240); beyond those they overflow or underflow and scores turn NaN.
+constexpr double kMaxCoordinate = 1e60;
+constexpr double kMinBoxSide = 1e-60;
+/// NumericError naming `name` unless every finite coordinate is within +-kMaxCoordinate and
+/// the longest side of the bounding box is 0 (left to the metric's own check) or at least
+/// kMinBoxSide. Non-finite coordinates are left to the readers' and metrics' own checks.
+void check_coordinate_range(const std::vector<Vec3>& positions, const std::string& name);
+
 /// Runs a metric: checks and completes the options, reads both inputs (concurrently unless
 /// run.threads == 1), computes, and fills the result's provenance (input names; seconds include
 /// the reading). Errors of the computation name both inputs. A metric that reads clouds gets the
-/// cloud readers' warnings before its own (mesh metrics add their readers' themselves).
+/// cloud readers' warnings before its own (mesh metrics add their readers' themselves). Checked
+/// up front: the thread count (check_thread_count), the model's weights (finite), both inputs'
+/// coordinates (check_coordinate_range); after: every score and pooled feature is finite
+/// (NumericError naming the metric, the direction and the first non-finite value otherwise).
 MetricResult run_metric(const MetricSpec& spec, const Input& reference, const Input& distorted,
                         const RunOptions& run, const OptionValues& options = {});
 

@@ -27,9 +27,13 @@ struct SamplingOptions {
   std::uint64_t seed = 1;
 };
 
+/// The most samples one call draws: a billion points are about 50 GB of cloud and k-d tree; a
+/// larger count is a mistaken density, not a cloud anyone can score.
+constexpr std::size_t kMaxSamples = 1000000000;
+
 /// Number of samples `options` asks for on a surface of `total_area`. Throws NumericError when
 /// both or neither of points / density are set, density is negative or not finite, or the count
-/// is zero.
+/// is zero or above kMaxSamples (the message gives the count the density would give).
 std::size_t sample_count(const SamplingOptions& options, double total_area);
 
 /// Samples the surface of `mesh`; colours interpolated barycentrically from the vertex colours.

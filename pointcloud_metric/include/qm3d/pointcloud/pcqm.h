@@ -39,6 +39,15 @@ inline constexpr Direction kPcqmDefaultDirection = Direction::kRefToDist;
 /// The run options (direction: ref-to-dist as the reference tool, dist-to-ref with the roles
 /// swapped, or symmetric, the mean of both, which the reference tool has no mode for; model:
 /// default the published 0.0057 F3 + 0.9771 F4 + 0.0172 F6) plus PCQM's own.
+/// The meaningful range of radius_rel: below a millionth of the box no real cloud has two
+/// points within the radius (and at 1e-300 its square underflows: NaN scores); above 10 boxes
+/// every point is every point's neighbour.
+constexpr double kMinRadiusRel = 1e-6;
+constexpr double kMaxRadiusRel = 10;
+/// The meaningful range of radius_factor (statistics radius / curvature radius).
+constexpr double kMinRadiusFactor = 1e-3;
+constexpr double kMaxRadiusFactor = 1e3;
+
 struct PcqmOptions : RunOptions {
   /// Curvature radius as a fraction of maxDim: r = radius_rel * maxDim (reference `-r`).
   double radius_rel = 0.004;
