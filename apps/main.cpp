@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <omp.h>
 
+#include <csignal>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -129,6 +130,20 @@ struct ScoreCommand {
   std::unique_ptr<ScoreCli> cli = std::make_unique<ScoreCli>();
 };
 
+// Before anything is scored: no output may replace an input or another output, and each must be
+// writable (scoring may take minutes).
+void check_score_outputs(const ScoreCli& cli, bool report_command) {
+  const std::vector<NamedPath> inputs = {{"REF", cli.ref},
+                                         {"DIST", cli.dist},
+                                         {"--model", cli.run.model_file},
+                                         {"--three-js", cli.report.three_js}};
+  if (report_command) {
+    check_outputs(inputs, {{"-o", cli.report.file}});
+  } else {
+    check_outputs(inputs, {{"-o", cli.out.output}, {"--map", cli.out.map}, {"--report", cli.report.file}});
+  }
+}
+
 int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   const ScoreCli& cli = *c.cli;
   const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
@@ -137,6 +152,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   request.options = metric_option_values(specs, cli.options);
   std::optional<ReportSettings> report;  // resolved first: a missing three.js fails fast
   if (!cli.report.file.empty()) report = report_settings(cli.report);
+  check_score_outputs(cli, c.report);
   request.keep_per_element = report.has_value();
   const Input ref = registry().read(cli.ref), dist = registry().read(cli.dist);
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
@@ -291,8 +307,12 @@ int main(int argc, char** argv) {
     std::cerr << "qm3d: " << kind << ": " << what << "\n";
     return code;
   };
+  // A closed pipe on stdout or -o is a write error reported by the writer, not a silent death.
+  std::signal(SIGPIPE, SIG_IGN);
   try {
-    return run(argc, argv);
+    const int code = run(argc, argv);
+    if (!(std::cout << std::flush)) return fail("error", "stdout: write failed", kExitBadInput);
+    return code;
   } catch (const qm3d::Error& e) {
     return fail("error", e.what(), kExitBadInput);
   } catch (const std::invalid_argument& e) {
