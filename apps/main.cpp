@@ -1,8 +1,8 @@
 // qm3d: visual quality metrics for coloured meshes (CMDM) and point clouds (PCQM).
 // Thin command-line front end: parse, call the libraries, write.
-#include <CLI/CLI.hpp>
 #include <omp.h>
 
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
 #include <memory>
@@ -140,7 +140,8 @@ void check_score_outputs(const ScoreCli& cli, bool report_command) {
   if (report_command) {
     check_outputs(inputs, {{"-o", cli.report.file}});
   } else {
-    check_outputs(inputs, {{"-o", cli.out.output}, {"--map", cli.out.map}, {"--report", cli.report.file}});
+    check_outputs(inputs,
+                  {{"-o", cli.out.output}, {"--map", cli.out.map}, {"--report", cli.report.file}});
   }
 }
 

@@ -108,8 +108,8 @@ std::string read_all(int fd, const fs::path& path, std::uintmax_t max_bytes, boo
   constexpr std::size_t kChunkBytes = std::size_t(1) << 16;
   const std::uintmax_t cap_limit = max_bytes + 1;
   std::string bytes;
-  bytes.resize(static_cast<std::size_t>(std::min<std::uintmax_t>(
-      std::max<std::uintmax_t>(size_hint + 1, kChunkBytes), cap_limit)));
+  bytes.resize(static_cast<std::size_t>(
+      std::min<std::uintmax_t>(std::max<std::uintmax_t>(size_hint + 1, kChunkBytes), cap_limit)));
   std::size_t used = 0;
   for (;;) {
     if (used == bytes.size()) {
@@ -200,8 +200,8 @@ std::optional<int> standard_stream_fd(const fs::path& path) {
   if (p == "/dev/stdout") return 1;
   if (p == "/dev/stderr") return 2;
   for (const std::string& prefix :
-       {std::string("/dev/fd/"), std::string("/proc/self/fd/"), std::string("/proc/thread-self/fd/"),
-        "/proc/" + std::to_string(::getpid()) + "/fd/"}) {
+       {std::string("/dev/fd/"), std::string("/proc/self/fd/"),
+        std::string("/proc/thread-self/fd/"), "/proc/" + std::to_string(::getpid()) + "/fd/"}) {
     if (p.rfind(prefix, 0) != 0) continue;
     const std::string n = p.substr(prefix.size());
     if (n.empty() || n.size() > 9 || !std::all_of(n.begin(), n.end(), ::isdigit)) return {};
@@ -273,7 +273,7 @@ fs::path follow_symlinks(const fs::path& path) {
 // A new file beside `target` that no other process can have made or redirected.
 struct TempFile {
   fs::path path;
-  int fd = -1;     ///< -1 when none could be created
+  int fd = -1;    ///< -1 when none could be created
   int error = 0;  ///< errno then
 };
 
@@ -288,8 +288,7 @@ TempFile try_create_temp_beside(const fs::path& target) {
     std::snprintf(suffix, sizeof suffix, ".qm3d-tmp-%d-%016llx", static_cast<int>(::getpid()),
                   static_cast<unsigned long long>(rng()));
     const fs::path tmp = dir / (target.filename().string() + suffix);
-    const int fd =
-        ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd >= 0) return {tmp, fd, 0};
     err = errno;
   }
@@ -354,8 +353,8 @@ void check_writable(const NamedPath& o) {
   // Creating the temporary file is the one test that also holds for root and read-only mounts.
   const TempFile probe = try_create_temp_beside(target);
   if (probe.fd < 0) {
-    throw output_error(o, "cannot create a file in " + dir.string() + " (" +
-                              errno_text(probe.error) + ")");
+    throw output_error(
+        o, "cannot create a file in " + dir.string() + " (" + errno_text(probe.error) + ")");
   }
   ::close(probe.fd);
   ::unlink(probe.path.c_str());
@@ -449,8 +448,8 @@ void check_outputs(const std::vector<NamedPath>& inputs, const std::vector<Named
     for (const NamedPath& in : inputs) {
       const auto other = identity(in.path);
       if (id && other && same(*id, *other)) {
-        throw output_error(o, "is the input " + in.option + " " + in.path.string() +
-                                  " (it would be overwritten)");
+        throw output_error(
+            o, "is the input " + in.option + " " + in.path.string() + " (it would be overwritten)");
       }
     }
     for (std::size_t j = 0; j < i; ++j) {

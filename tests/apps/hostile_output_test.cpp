@@ -121,8 +121,9 @@ TEST_F(HostileIo, TwoOutputsOnOnePathAreRefused) {
 TEST_F(HostileIo, OutputIntoAFifoKeepsTheFifo) {
   ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
   // The reader runs beside qm3d; `timeout` ends either if the other never comes.
-  shell("(/usr/bin/timeout 60 \"$QM3D\" -q pcqm a.ply b.ply -o fifo 2> io/err &) ; "
-        "/usr/bin/timeout 60 cat fifo > io/got; wait");
+  shell(
+      "(/usr/bin/timeout 60 \"$QM3D\" -q pcqm a.ply b.ply -o fifo 2> io/err &) ; "
+      "/usr/bin/timeout 60 cat fifo > io/got; wait");
   EXPECT_EQ(slurp(dir_ / "io" / "err"), "");
   EXPECT_EQ(slurp(dir_ / "io" / "got").rfind("PCQM = ", 0), 0u) << slurp(dir_ / "io" / "got");
   EXPECT_TRUE(fs::is_fifo(dir_ / "fifo"));
@@ -222,12 +223,14 @@ TEST_F(HostileIo, UnwritableOutputsAreRefusedBeforeScoring) {
 
 TEST_F(HostileIo, DevicesAsInputsAreRefused) {
   expect_refused(run("pcqm /dev/zero b.ply"), {"/dev/zero: not a regular file (character device)"});
-  file("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nmtllib t.mtl\nusemtl m\n"
-                "f 1/1 2/2 3/3\n");
+  file("t.obj",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nmtllib t.mtl\nusemtl m\n"
+       "f 1/1 2/2 3/3\n");
   file("t.mtl", "newmtl m\nmap_Kd /dev/zero\n");
   expect_refused(run("cmdm t.obj t.obj"), {"/dev/zero: not a regular file (character device)"});
-  file("u.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nmtllib /dev/urandom\n"
-                "usemtl m\nf 1/1 2/2 3/3\n");
+  file("u.obj",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nmtllib /dev/urandom\n"
+       "usemtl m\nf 1/1 2/2 3/3\n");
   expect_refused(run("cmdm u.obj u.obj"), {"/dev/urandom: not a regular file (character device)"});
   expect_refused(run("cmdm m.off m2.off --model /dev/zero"), {"/dev/zero: not a regular file"});
   file("mos.csv", kMos);
@@ -238,8 +241,9 @@ TEST_F(HostileIo, APipeIsReadAsAFile) {
   const CliRun files = run("pcqm a.ply b.ply");
   ASSERT_EQ(files.code, 0) << files.err;
   ASSERT_EQ(::mkfifo((dir_ / "fifo").c_str(), 0600), 0);
-  shell("/usr/bin/timeout 60 \"$QM3D\" -q pcqm a.ply fifo > io/out 2> io/err & "
-        "/usr/bin/timeout 60 cat b.ply > fifo; wait $!; echo $? > io/rc");
+  shell(
+      "/usr/bin/timeout 60 \"$QM3D\" -q pcqm a.ply fifo > io/out 2> io/err & "
+      "/usr/bin/timeout 60 cat b.ply > fifo; wait $!; echo $? > io/rc");
   EXPECT_EQ(slurp(dir_ / "io" / "rc"), "0\n") << slurp(dir_ / "io" / "err");
   EXPECT_EQ(slurp(dir_ / "io" / "out"), files.out);
   EXPECT_EQ(slurp(dir_ / "io" / "err"), "");

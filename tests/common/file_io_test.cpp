@@ -1,8 +1,7 @@
 #include "qm3d/common/file_io.h"
 
-#include <gtest/gtest.h>
-
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -215,13 +214,16 @@ TEST(FileIo, OutputsThatAreInputsOrEachOtherAreRefused) {
   fs::create_hard_link(d / "a.ply", d / "hard.ply");
   fs::create_symlink("a.ply", d / "soft.ply");
   const std::vector<NamedPath> in = {{"REF", d / "a.ply"}, {"DIST", d / "b.ply"}};
-  EXPECT_EQ(message_of([&] { check_outputs(in, {{"-o", d / "a.ply"}}); }),
+  EXPECT_EQ(message_of([&] {
+              check_outputs(in, {{"-o", d / "a.ply"}});
+            }),
             "-o " + (d / "a.ply").string() + ": is the input REF " + (d / "a.ply").string() +
                 " (it would be overwritten)");
   EXPECT_NE(message_of([&] { check_outputs(in, {{"--map", d / "hard.ply"}}); }), "(no InputError)");
   EXPECT_NE(message_of([&] { check_outputs(in, {{"--map", d / "soft.ply"}}); }), "(no InputError)");
-  EXPECT_NE(message_of([&] { check_outputs(in, {{"-o", d / "x"}, {"--map", d / "." / "x"}}); })
-                .find("is also the output -o"),
+  EXPECT_NE(message_of([&] {
+              check_outputs(in, {{"-o", d / "x"}, {"--map", d / "." / "x"}});
+            }).find("is also the output -o"),
             std::string::npos);
   check_outputs(in, {{"-o", d / "x"}, {"--map", d / "y"}, {"--report", ""}});
   const fs::path null = device(d, "null", 3);
@@ -233,10 +235,14 @@ TEST(FileIo, OutputsThatAreInputsOrEachOtherAreRefused) {
 
 TEST(FileIo, UnwritableOutputsAreFoundBeforehand) {
   const fs::path d = temp_dir("unwritable");
-  EXPECT_EQ(message_of([&] { check_outputs({}, {{"--map", d / "none" / "m.ply"}}); }),
-            "--map " + (d / "none" / "m.ply").string() + ": the folder " +
-                (d / "none").string() + " does not exist");
-  EXPECT_EQ(message_of([&] { check_outputs({}, {{"-o", d}}); }),
+  EXPECT_EQ(message_of([&] {
+              check_outputs({}, {{"--map", d / "none" / "m.ply"}});
+            }),
+            "--map " + (d / "none" / "m.ply").string() + ": the folder " + (d / "none").string() +
+                " does not exist");
+  EXPECT_EQ(message_of([&] {
+              check_outputs({}, {{"-o", d}});
+            }),
             "-o " + d.string() + ": is a directory");
   EXPECT_TRUE(fs::is_empty(d));
   fs::remove_all(d);
