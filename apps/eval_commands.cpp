@@ -227,6 +227,7 @@ void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& 
 }
 
 int run_eval(const EvalCommandOptions& o, bool quiet) {
+  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
   const EvalData d = load_eval_data(o);
   warn_partial_join(d, quiet);
   EvaluationOptions options;
@@ -265,7 +266,9 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                 "Match keys by file stem (directories and extension removed), e.g. batch paths "
                 "against stimulus names");
   cmd->add_option("--bootstrap", o.bootstrap,
-                  "Bootstrap replicates for the 95% intervals (0 = none)")
+                  "Bootstrap replicates for the 95% intervals (0 = none; at most " +
+                      std::to_string(kMaxBootstrapReplicates) + ")")
+      ->check(CLI::Range(std::size_t(0), kMaxBootstrapReplicates))
       ->capture_default_str();
   cmd->add_option("--seed", o.seed, "Seed of the bootstrap")->capture_default_str();
   auto* json = cmd->add_flag("--json", o.json, "Write one JSON object");

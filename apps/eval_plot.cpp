@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -202,6 +203,29 @@ int run_program(const fs::path& program, const fs::path& script) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+// A new folder in the system's temporary directory, removed with everything in it.
+class PrivateDir {
+ public:
+  explicit PrivateDir(const fs::path& for_output) {
+    std::string pattern = (fs::temp_directory_path() / "qm3d-plot-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      throw InputError(for_output.string() + ": cannot create a temporary folder for gnuplot (" +
+                       std::strerror(errno) + ")");
+    }
+    path_ = pattern;
+  }
+  PrivateDir(const PrivateDir&) = delete;
+  PrivateDir& operator=(const PrivateDir&) = delete;
+  ~PrivateDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
 void write_png(const fs::path& path, const ScatterPlot& p) {
   const auto gnuplot = find_program("gnuplot");
   if (!gnuplot) {
@@ -209,23 +233,20 @@ void write_png(const fs::path& path, const ScatterPlot& p) {
                      ": PNG plots are drawn by gnuplot, which is not installed "
                      "(Debian: apt-get install gnuplot-nox); or write an .svg plot");
   }
-  const std::string unique = std::to_string(::getpid());
-  const fs::path image = path.string() + ".tmp-" + unique + ".png";
-  const fs::path script = fs::temp_directory_path() / ("qm3d-plot-" + unique + ".gp");
+  // gnuplot draws into a folder of our own (no name another program can guess or redirect); the
+  // image then goes to `path` as every other output does (a FIFO or symlink stays one).
+  const PrivateDir dir(path);
+  const fs::path image = dir.path() / "plot.png";
+  const fs::path script = dir.path() / "plot.gp";
   write_file_atomically(script, [&](std::ostream& out) { out << gnuplot_script(p, image); });
   const int status = run_program(*gnuplot, script);
   std::error_code ec;
-  fs::remove(script, ec);
   if (status != 0 || !fs::is_regular_file(image, ec) || fs::file_size(image, ec) == 0) {
-    fs::remove(image, ec);
     throw InputError(path.string() + ": gnuplot (" + gnuplot->string() +
                      ") failed to draw the plot (exit status " + std::to_string(status) + ")");
   }
-  fs::rename(image, path, ec);
-  if (ec) {
-    fs::remove(image, ec);
-    throw InputError(path.string() + ": cannot write the plot");
-  }
+  const std::string png = read_file_bytes(image);
+  write_file_atomically(path, [&](std::ostream& out) { out << png; });
 }
 
 }  // namespace

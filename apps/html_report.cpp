@@ -325,7 +325,9 @@ InputError three_js_missing(const std::filesystem::path& path) {
 
 std::string three_js_text(const std::filesystem::path& path) {
   if (!std::filesystem::is_regular_file(path)) throw three_js_missing(path);
-  std::string text = read_file_bytes(path);
+  // three.js's minified build is ~1 MB; the limit only keeps a wrong path from filling memory.
+  constexpr std::uintmax_t kMaxThreeJsBytes = std::uintmax_t(64) << 20;
+  std::string text = read_file_bytes(path, kMaxThreeJsBytes);
   // Inside <script>, "</script" would end the element; a JS string or regex may spell it "<\/".
   for (std::size_t p = text.find("</script"); p != std::string::npos;
        p = text.find("</script", p + 2)) {

@@ -1,8 +1,9 @@
 // qm3d: visual quality metrics for coloured meshes (CMDM) and point clouds (PCQM).
 // Thin command-line front end: parse, call the libraries, write.
-#include <CLI/CLI.hpp>
 #include <omp.h>
 
+#include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -130,6 +131,21 @@ struct ScoreCommand {
   std::unique_ptr<ScoreCli> cli = std::make_unique<ScoreCli>();
 };
 
+// Before anything is scored: no output may replace an input or another output, and each must be
+// writable (scoring may take minutes).
+void check_score_outputs(const ScoreCli& cli, bool report_command) {
+  const std::vector<NamedPath> inputs = {{"REF", cli.ref},
+                                         {"DIST", cli.dist},
+                                         {"--model", cli.run.model_file},
+                                         {"--three-js", cli.report.three_js}};
+  if (report_command) {
+    check_outputs(inputs, {{"-o", cli.report.file}});
+  } else {
+    check_outputs(inputs,
+                  {{"-o", cli.out.output}, {"--map", cli.out.map}, {"--report", cli.report.file}});
+  }
+}
+
 int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   const ScoreCli& cli = *c.cli;
   const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
@@ -138,6 +154,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   request.options = metric_option_values(specs, cli.options);
   std::optional<ReportSettings> report;  // resolved first: a missing three.js fails fast
   if (!cli.report.file.empty()) report = report_settings(cli.report);
+  check_score_outputs(cli, c.report);
   request.keep_per_element = report.has_value();
   const ReadOptions read = read_options(cli.colour_scale);
   const Input ref = registry().read(cli.ref, read), dist = registry().read(cli.dist, read);
@@ -295,8 +312,12 @@ int main(int argc, char** argv) {
     std::cerr << "qm3d: " << kind << ": " << what << "\n";
     return code;
   };
+  // A closed pipe on stdout or -o is a write error reported by the writer, not a silent death.
+  std::signal(SIGPIPE, SIG_IGN);
   try {
-    return run(argc, argv);
+    const int code = run(argc, argv);
+    if (!(std::cout << std::flush)) return fail("error", "stdout: write failed", kExitBadInput);
+    return code;
   } catch (const qm3d::Error& e) {
     return fail("error", e.what(), kExitBadInput);
   } catch (const std::invalid_argument& e) {

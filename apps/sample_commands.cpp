@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
 #include "qm3d/mesh/texture.h"
 
@@ -45,6 +46,7 @@ int run_sample(const SampleCommands& c) {
   if (c.vertices == counted) {
     throw std::invalid_argument("sample: give exactly one of --points, --density, --vertices");
   }
+  check_outputs({{"MESH", c.input}}, {{"-o", c.output}});
   const ColoredCloud cloud = c.vertices
                                  ? vertex_cloud_of(c.input)
                                  : registry().sampler()(registry().read(c.input),
@@ -55,6 +57,7 @@ int run_sample(const SampleCommands& c) {
 }
 
 int run_texture_to_vertex(const SampleCommands& c) {
+  check_outputs({{"IN", c.input}}, {{"-o", c.output}});
   const mesh::TexturedMesh textured = mesh::read_textured_obj(c.input);
   const ColoredMesh& m = textured.file.mesh;
   write_colored_ply(c.output, m.positions, m.colors, m.triangles);

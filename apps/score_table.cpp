@@ -84,7 +84,7 @@ std::map<std::string, std::size_t> index_keys(const CsvTable& t, std::size_t col
 CsvTable read_csv_table(const std::filesystem::path& path) {
   CsvTable t;
   t.path = path.string();
-  std::string text = read_file_bytes(path);
+  std::string text = read_file_bytes(path, kMaxTableBytes);
   if (text.rfind(kUtf8Bom, 0) == 0) text.erase(0, 3);
   std::istringstream in(text);
   std::string line;

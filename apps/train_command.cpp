@@ -355,6 +355,8 @@ void warn_partial_join(const TrainData& d, bool quiet) {
 }  // namespace
 
 int run_train(const TrainCommandOptions& o, bool quiet) {
+  check_outputs({{"FEATURES", o.features}, {"MOS", o.mos}},
+                {{"-o", o.output}, {"--report", o.report}});
   const TrainData d = load_train_data(o);
   warn_partial_join(d, quiet);
   const TrainingResult r = train_linear_model(d.set, training_options(o));

@@ -295,6 +295,11 @@ void check_evaluation_input(const std::vector<double>& scores, const std::vector
   if (!(options.confidence > 0 && options.confidence < 1)) {
     throw std::invalid_argument("evaluation: confidence must be in (0, 1)");
   }
+  if (options.bootstrap > kMaxBootstrapReplicates) {
+    throw std::invalid_argument("evaluation: bootstrap replicates must be at most " +
+                                std::to_string(kMaxBootstrapReplicates) + " (got " +
+                                std::to_string(options.bootstrap) + ")");
+  }
   for (std::size_t i = 0; i < ci.size(); ++i) {
     if (!(ci[i] >= 0) || !std::isfinite(ci[i])) {
       throw NumericError("evaluation: confidence interval " + std::to_string(i + 1) +

@@ -1,6 +1,11 @@
 #include "qm3d/common/metric.h"
 
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -25,6 +30,10 @@ std::string head_of(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path, ec)) throw InputError(path.string() + ": no such file");
   if (std::filesystem::is_directory(path, ec)) {
     throw InputError(path.string() + ": is a directory, not a file");
+  }
+  // A device (/dev/zero) never ends and a FIFO without writer would block the open below.
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path.string() + ": not a regular file (" + file_kind(path) + ")");
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string() + ": cannot be opened for reading");
@@ -138,8 +147,64 @@ FileFormat detect_format(const std::filesystem::path& path) {
 // ---------------------------------------------------------------------------------------------
 // Input
 
+namespace {
+
+// A pipe's content (`<(zcat a.ply.gz)`, a FIFO) copied into an anonymous in-memory file: the
+// readers look at a file more than once (its head, then all of it) and a pipe gives its bytes
+// only once.
+class PipeSpool {
+ public:
+  explicit PipeSpool(const std::filesystem::path& pipe) {
+    const std::string bytes = read_file_bytes(pipe);
+    fd_ = ::memfd_create("qm3d-pipe", MFD_CLOEXEC);
+    if (fd_ < 0) throw InputError(pipe.string() + ": cannot hold the pipe's content in memory");
+    for (std::size_t done = 0; done < bytes.size();) {
+      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw InputError(pipe.string() + ": cannot hold the pipe's content in memory");
+      done += static_cast<std::size_t>(n);
+    }
+  }
+  PipeSpool(const PipeSpool&) = delete;
+  PipeSpool& operator=(const PipeSpool&) = delete;
+  ~PipeSpool() { ::close(fd_); }
+  std::filesystem::path path() const { return "/proc/self/fd/" + std::to_string(fd_); }
+
+ private:
+  int fd_ = -1;
+};
+
+bool is_pipe(const std::filesystem::path& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISFIFO(st.st_mode);
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  for (auto p = text.find(from); p != std::string::npos; p = text.find(from, p + to.size())) {
+    text.replace(p, from.size(), to);
+  }
+  return text;
+}
+
+// Runs a reader of a spooled pipe; its errors name the pipe, not the in-memory copy.
+template <class Read>
+auto read_renamed(const std::filesystem::path& read_path, const std::string& name, Read read) {
+  try {
+    return read();
+  } catch (const InputError& e) {
+    throw InputError(replaced(e.what(), read_path.string(), name));
+  } catch (const FormatError& e) {
+    throw FormatError(replaced(e.what(), read_path.string(), name));
+  } catch (const NumericError& e) {
+    throw NumericError(replaced(e.what(), read_path.string(), name));
+  }
+}
+
+}  // namespace
+
 struct Input::State {
   std::string name;
+  std::shared_ptr<PipeSpool> spool;  ///< a pipe's content; `path` is then its in-memory copy
   std::filesystem::path path;
   FileFormat format = FileFormat::kPly;
   Kind kind = Kind::kCloud;
@@ -157,14 +222,18 @@ Input Input::from_file(const std::filesystem::path& path, const Registry& regist
   State& s = *in.state_;
   s.name = path.string();
   s.path = path;
+  if (is_pipe(path)) {
+    s.spool = std::make_shared<PipeSpool>(path);
+    s.path = s.spool->path();
+  }
   s.readers = registry.readers();
   s.read_options = options;
-  const std::string head = head_of(path);
+  const std::string head = head_of(s.path);
   s.format = format_of_file(head, path);
   switch (s.format) {
     case FileFormat::kPly: {
       // The declared counts are checked against the whole file's size (the head may be cut).
-      const ply::Header h = ply::parse_header(head, s.name, std::filesystem::file_size(path));
+      const ply::Header h = ply::parse_header(head, s.name, std::filesystem::file_size(s.path));
       s.kind = Kind::kCloud;
       for (const auto& e : h.elements) {
         if (e.name == "face" && e.count > 0) s.kind = Kind::kMesh;
@@ -175,7 +244,7 @@ Input Input::from_file(const std::filesystem::path& path, const Registry& regist
     case FileFormat::kOff: s.kind = off_has_faces(head) ? Kind::kMesh : Kind::kCloud; break;
     case FileFormat::kObj: {
       // Faces may come after many vertices: look at the whole text.
-      const std::string text = head.size() < kSniffBytes ? head : read_file_bytes(path);
+      const std::string text = head.size() < kSniffBytes ? head : read_file_bytes(s.path);
       s.kind = has_line_starting(text, "f ") || has_line_starting(text, "f\t") ? Kind::kMesh
                                                                                : Kind::kCloud;
       break;
@@ -220,7 +289,8 @@ const MeshData& Input::mesh() const {
     throw FormatError(s.name + ": a point cloud (no faces), not a mesh; score it with PCQM");
   }
   if (!s.readers.mesh) throw std::logic_error("no mesh reader registered");
-  s.mesh = s.readers.mesh(s.path, s.format, s.read_options);
+  s.mesh = read_renamed(s.path, s.name,
+                        [&] { return s.readers.mesh(s.path, s.format, s.read_options); });
   return *s.mesh;
 }
 
@@ -236,7 +306,7 @@ const ColoredCloud& Input::cloud() const {
   const bool mesh_format = s.format == FileFormat::kObj || s.format == FileFormat::kOff;
   const auto& read = mesh_format ? s.readers.mesh_vertices : s.readers.cloud;
   if (!read) throw std::logic_error("no cloud reader registered");
-  s.cloud = read(s.path, s.format, s.read_options);
+  s.cloud = read_renamed(s.path, s.name, [&] { return read(s.path, s.format, s.read_options); });
   return s.cloud->cloud;
 }
 

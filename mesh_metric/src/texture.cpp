@@ -122,7 +122,7 @@ void read_kd(Tokens& tokens, Material& m, const std::string& file, std::size_t l
 
 // Materials by name; `map_Kd`'s last token is the file, relative to the MTL's folder.
 std::map<std::string, Material> read_mtl(const std::filesystem::path& path) {
-  const std::string text = read_file_bytes(path);
+  const std::string text = read_file_bytes(path, kMaxMtlBytes);
   std::map<std::string, Material> materials;
   Material* current = nullptr;
   Statements lines(text);
@@ -227,7 +227,7 @@ const Rgb& texel(const TextureImage& image, long long x, long long y) {
 }  // namespace
 
 TextureImage read_texture(const std::filesystem::path& path) {
-  const std::string bytes = read_file_bytes(path);
+  const std::string bytes = read_file_bytes(path, kMaxTextureBytes);
   if (bytes.size() > static_cast<std::size_t>(INT_MAX)) fail(path.string(), "image too large");
   int w = 0, h = 0, channels = 0;
   const std::unique_ptr<unsigned char, void (*)(void*)> pixels(

@@ -160,6 +160,19 @@ TEST(Evaluation, PointValuesAndDeterministicIntervals) {
   EXPECT_NE(evaluate_scores(scores, mos, {}, o).srocc.ci->low, a.srocc.ci->low);
 }
 
+// A count read from a negative number wraps round to ~1.8e19 and would never end (issue 24).
+TEST(Evaluation, BootstrapCountIsBounded) {
+  std::vector<double> mos;
+  const std::vector<double> scores = noisy_scores(mos, 20);
+  EvaluationOptions o;
+  o.bootstrap = static_cast<std::size_t>(-1);
+  EXPECT_THROW(evaluate_scores(scores, mos, {}, o), std::invalid_argument);
+  o.bootstrap = std::size_t(1) << 40;
+  EXPECT_THROW(evaluate_scores(scores, mos, {}, o), std::invalid_argument);
+  o.bootstrap = kMaxBootstrapReplicates + 1;
+  EXPECT_THROW(evaluate_scores(scores, mos, {}, o), std::invalid_argument);
+}
+
 TEST(Evaluation, OutlierRatioOnlyWithIntervals) {
   std::vector<double> mos;
   const std::vector<double> scores = noisy_scores(mos, 40);

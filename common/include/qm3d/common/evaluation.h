@@ -83,8 +83,14 @@ double root_mean_square_error(const std::vector<double>& predicted,
 double outlier_ratio(const std::vector<double>& predicted, const std::vector<double>& mos,
                      const std::vector<double>& ci95);
 
+/// Most bootstrap replicates evaluate_scores() accepts: 100 times the usual 1000 (percentile
+/// intervals stop changing long before), and each replicate refits the logistic, so more would
+/// only run for hours (a negative count read as unsigned wraps round to ~1.8e19).
+inline constexpr std::size_t kMaxBootstrapReplicates = 100000;
+
 struct EvaluationOptions {
-  /// Bootstrap replicates (pairs resampled with replacement); 0 = no intervals.
+  /// Bootstrap replicates (pairs resampled with replacement); 0 = no intervals; at most
+  /// kMaxBootstrapReplicates.
   std::size_t bootstrap = 1000;
   /// Seed of the std::mt19937_64 that draws the replicates (fully specified by the standard,
   /// so the intervals are the same on every platform).
