@@ -49,5 +49,5 @@ def test_a_radius_out_of_range_is_a_value_error():
 
 def test_nan_weights_are_a_value_error():
     mesh = tetrahedron()
-    with pytest.raises(ValueError, match="weight 1 of 8 is nan"):
+    with pytest.raises(ValueError, match="weights"):
         qm3d.cmdm(mesh, mesh, weights=[math.nan] + [0.0] * 7)
