@@ -168,6 +168,8 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);
+  std::string batch_worker;  // set only in a worker process of `qm3d batch` (batch.h)
+  app.add_option("--batch-worker", batch_worker)->group("");
 
   // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
   std::vector<ScoreCommand> score_commands;
@@ -221,6 +223,7 @@ int run(int argc, char** argv) {
       ->capture_default_str();
   batch_cmd->add_flag("--resume", batch.resume, "Skip the pairs already in RESULTS");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
+  add_batch_safety_options(batch_cmd, batch);
   add_run_options(batch_cmd, batch_run, nullptr);
   add_metric_options(batch_cmd, all_metrics(), batch_options);
   add_shard_option(batch_cmd, batch.shard);
@@ -271,7 +274,9 @@ int run(int argc, char** argv) {
       batch.report_dir = batch_report.file;
       batch.report = report_settings(batch_report);
     }
-    return run_batch(batch);
+    batch.program = argv[0];
+    batch.command_line.assign(argv + 1, argv + argc);
+    return batch_worker.empty() ? run_batch(batch) : run_batch_worker(batch, batch_worker);
   }
   ScoreRequest demo;
   demo.run.threads = global.threads;
