@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <omp.h>
 #include <sys/prctl.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <atomic>
@@ -240,11 +241,23 @@ std::vector<std::string> worker_args(const BatchOptions& o, const PairJob& job, 
   return args;
 }
 
+// A worker ended by SIGINT, SIGTERM, SIGHUP or SIGQUIT was stopped with its batch (Ctrl-C
+// reaches the whole process group, scancel every process of the job), not by its pair: no row
+// is written for it (--resume scores it again) and the batch ends by the same signal.
+void stop_if_stopped_from_outside(const WorkerOutcome& w) {
+  if (w.timed_out || !WIFSIGNALED(w.wait_status)) return;
+  const int sig = WTERMSIG(w.wait_status);
+  if (sig != SIGINT && sig != SIGTERM && sig != SIGHUP && sig != SIGQUIT) return;
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
 // Scores a job in a worker process: the rows it wrote, and for each row it did not write (it
 // crashed, aborted, ran out of memory or time) an error row saying how it ended. False when
 // the worker wrote every row but failed afterwards (a report it could not write: on stderr).
 bool score_in_worker(const PairJob& job, const BatchOptions& o, int threads, const RowDone& done) {
   const WorkerOutcome w = run_worker(worker_args(o, job, threads), o.pair_timeout_s);
+  stop_if_stopped_from_outside(w);
   std::map<std::string, std::string> rows;  // metric -> row, from complete lines only
   std::istringstream in(w.output);
   std::string line;

@@ -3,7 +3,9 @@
 // on the same results, error rows left behind, lists with a BOM or reordered columns, shards
 // with a non-number score or missing.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <fcntl.h>
@@ -133,6 +135,37 @@ TEST_F(BatchHostile, AGenuinelyCrashingInputLeavesEveryRow) {
   const Rows rows = read_rows(results_);
   EXPECT_EQ(rows.by_name.size(), 2u) << slurp(results_);
   EXPECT_EQ(rows.by_name.at("blob4_colnoise.off").first, "ok");
+}
+
+// A batch stopped from outside (Ctrl-C reaches its process group, scancel every process of the
+// job) records no error row for the pairs its workers were scoring: --resume scores them.
+TEST_F(BatchHostile, ABatchStoppedFromOutsideLeavesNoRowForThePairInFlight) {
+  write_list({"blob4_colnoise.off", "blob4_geonoise.off"});
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::setpgid(0, 0);
+    ::setenv("QM3D_DATA_DIR", test::tables_dir().c_str(), 1);
+    ::setenv("QM3D_TEST_FAULT", "hang:blob4_geonoise.off", 1);
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    ::dup2(devnull, 2);
+    ::execl(QM3D_BINARY, "qm3d", "batch", list_.c_str(), "-o", results_.c_str(), "--quiet",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::setpgid(pid, pid);
+  // The first pair's row is written; the second pair's worker hangs.
+  for (int i = 0; i < 6000 && read_rows(results_).by_name.size() < 1; ++i) ::usleep(20000);
+  ASSERT_EQ(read_rows(results_).by_name.size(), 1u);
+  ::usleep(200000);
+  ::kill(-pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  EXPECT_EQ(read_rows(results_).by_name.count("blob4_geonoise.off"), 0u) << slurp(results_);
+  const CliRun resumed = qm3d(batch("--resume"));
+  EXPECT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_EQ(read_rows(results_).by_name.size(), 2u);
 }
 
 // ---- resume --------------------------------------------------------------------------------
