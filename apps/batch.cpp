@@ -230,22 +230,27 @@ void score_here(const PairJob& job, const BatchOptions& per_job, PairReports& re
   }
 }
 
-// The worker's command line: this run's own arguments (the same options, list and report
-// folder), told which rows to score with how many threads by the hidden --batch-worker.
-std::vector<std::string> worker_args(const BatchOptions& o, const PairJob& job, int threads) {
-  std::string spec = std::to_string(threads) + "," + csv_field(job.pair.reference) + "," +
-                     csv_field(job.pair.distorted);
-  for (const std::string& m : job.metrics) spec += "," + csv_field(m);
-  std::vector<std::string> args{o.program, "--batch-worker", spec};
+// The workers' command line: this run's own arguments (the same options, list and report
+// folder) and the hidden --batch-worker.
+std::vector<std::string> worker_args(const BatchOptions& o) {
+  std::vector<std::string> args{o.program, "--batch-worker"};
   args.insert(args.end(), o.command_line.begin(), o.command_line.end());
   return args;
+}
+
+// The line that asks a worker for a job: threads, reference, distorted, metrics (CSV fields).
+std::string job_line(const PairJob& job, int threads) {
+  std::string line = std::to_string(threads) + "," + csv_field(job.pair.reference) + "," +
+                     csv_field(job.pair.distorted);
+  for (const std::string& m : job.metrics) line += "," + csv_field(m);
+  return line;
 }
 
 // A worker ended by SIGINT, SIGTERM, SIGHUP or SIGQUIT was stopped with its batch (Ctrl-C
 // reaches the whole process group, scancel every process of the job), not by its pair: no row
 // is written for it (--resume scores it again) and the batch ends by the same signal.
-void stop_if_stopped_from_outside(const WorkerOutcome& w) {
-  if (w.timed_out || !WIFSIGNALED(w.wait_status)) return;
+void stop_if_stopped_from_outside(const JobOutcome& w) {
+  if (w.finished || w.timed_out || !WIFSIGNALED(w.wait_status)) return;
   const int sig = WTERMSIG(w.wait_status);
   if (sig != SIGINT && sig != SIGTERM && sig != SIGHUP && sig != SIGQUIT) return;
   std::signal(sig, SIG_DFL);
@@ -254,14 +259,13 @@ void stop_if_stopped_from_outside(const WorkerOutcome& w) {
 
 // Scores a job in a worker process: the rows it wrote, and for each row it did not write (it
 // crashed, aborted, ran out of memory or time) an error row saying how it ended. False when
-// the worker wrote every row but failed afterwards (a report it could not write: on stderr).
-bool score_in_worker(const PairJob& job, const BatchOptions& o, int threads, const RowDone& done) {
-  const WorkerOutcome w = run_worker(worker_args(o, job, threads), o.pair_timeout_s);
+// the worker wrote every row but a report failed (said on stderr by the worker).
+bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads,
+                     const BatchOptions& o, const RowDone& done) {
+  const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s);
   stop_if_stopped_from_outside(w);
-  std::map<std::string, std::string> rows;  // metric -> row, from complete lines only
-  std::istringstream in(w.output);
-  std::string line;
-  while (std::getline(in, line) && !in.eof()) {
+  std::map<std::string, std::string> rows;  // metric -> row
+  for (const std::string& line : w.lines) {
     const auto f = csv_split(line);
     if (f.size() > 4 && f[0] == job.pair.reference && f[1] == job.pair.distorted) {
       rows.emplace(f[2], line);
@@ -277,7 +281,7 @@ bool score_in_worker(const PairJob& job, const BatchOptions& o, int threads, con
            true);
     }
   }
-  return rows.size() < job.metrics.size() || w.wait_status == 0;
+  return !w.finished || w.end_status.empty();
 }
 
 // Test hook, for tests/apps/batch_hostile_test.cpp only: QM3D_TEST_FAULT=KIND:NAME makes a
@@ -364,10 +368,11 @@ bool score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std
   std::atomic<bool> workers_ok{true};
   auto worker = [&] {
     if (!o.isolate) omp_set_num_threads(job_threads);
+    WorkerProcess process(worker_args(o));  // started by its first job
     for (std::size_t i = next++; i < jobs.size(); i = next++) {
       if (!o.isolate) {
         score_here(jobs[i], per_job, reports, done);
-      } else if (!score_in_worker(jobs[i], o, job_threads, done)) {
+      } else if (!score_in_worker(jobs[i], process, job_threads, o, done)) {
         workers_ok = false;
       }
     }
@@ -465,8 +470,11 @@ void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {
       ->excludes(timeout);
 }
 
-int run_batch_worker(const BatchOptions& o, const std::string& spec) {
-  const auto f = csv_split(spec);
+namespace {
+
+// One job of a worker: its rows on stdout as they are scored, then the end line.
+void run_worker_job(const BatchOptions& o, const std::string& line) {
+  const auto f = csv_split(line);
   if (f.size() < 4 || f[0].empty() || f[0].size() > 6 ||
       f[0].find_first_not_of("0123456789") != std::string::npos) {
     throw std::invalid_argument("--batch-worker: an internal option of qm3d batch");
@@ -475,8 +483,6 @@ int run_batch_worker(const BatchOptions& o, const std::string& spec) {
   const PairJob job{{f[1], f[2], ""}, {f.begin() + 3, f.end()}};
   std::vector<std::pair<ListPair, std::string>> todo;
   for (const std::string& m : job.metrics) todo.emplace_back(job.pair, m);
-  // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   omp_set_num_threads(threads);
   PairReports reports(o, todo);
   test_fault(job.pair);
@@ -484,7 +490,18 @@ int run_batch_worker(const BatchOptions& o, const std::string& spec) {
     std::cout << row << "\n" << std::flush;
   });
   for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
-  return reports.errors().empty() ? 0 : 2;
+  std::cout << kJobEnd << (reports.errors().empty() ? "" : " report-failed") << "\n"
+            << std::flush;
+}
+
+}  // namespace
+
+int run_batch_worker(const BatchOptions& o) {
+  // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  std::string line;
+  while (std::getline(std::cin, line)) run_worker_job(o, line);
+  return 0;
 }
 
 }  // namespace qm3d::app

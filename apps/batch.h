@@ -64,10 +64,11 @@ int run_batch(const BatchOptions& options);
 /// Adds --retry-failed, --pair-timeout and --no-isolation to `batch_cmd`, parsed into `options`.
 void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& options);
 
-/// The worker of an isolated batch (`qm3d --batch-worker SPEC batch ...`): scores the rows SPEC
-/// names ("THREADS,REFERENCE,DISTORTED,METRIC..." as CSV fields) and writes them on stdout,
-/// one line each as soon as it is scored, and their pair's report (report_dir). Returns 0, or
-/// 2 when the report could not be written.
-int run_batch_worker(const BatchOptions& options, const std::string& spec);
+/// The worker of an isolated batch (`qm3d --batch-worker batch ...`, started by run_batch):
+/// reads jobs from stdin, one line each ("THREADS,REFERENCE,DISTORTED,METRIC..." as CSV
+/// fields), and for each writes its rows on stdout as soon as each is scored, writes the pair's
+/// report (report_dir), then the line kJobEnd (pair_process.h), followed by " report-failed"
+/// when the report could not be written. Returns 0 at the end of stdin.
+int run_batch_worker(const BatchOptions& options);
 
 }  // namespace qm3d::app

@@ -168,8 +168,8 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);
-  std::string batch_worker;  // set only in a worker process of `qm3d batch` (batch.h)
-  app.add_option("--batch-worker", batch_worker)->group("");
+  bool batch_worker = false;  // set only in a worker process of `qm3d batch` (batch.h)
+  app.add_flag("--batch-worker", batch_worker)->group("");
 
   // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
   std::vector<ScoreCommand> score_commands;
@@ -276,7 +276,7 @@ int run(int argc, char** argv) {
     }
     batch.program = argv[0];
     batch.command_line.assign(argv + 1, argv + argc);
-    return batch_worker.empty() ? run_batch(batch) : run_batch_worker(batch, batch_worker);
+    return batch_worker ? run_batch_worker(batch) : run_batch(batch);
   }
   ScoreRequest demo;
   demo.run.threads = global.threads;

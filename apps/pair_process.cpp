@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -24,74 +25,133 @@ using Clock = std::chrono::steady_clock;
 int wait_ms(bool limited, Clock::time_point deadline) {
   if (!limited) return -1;
   const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-  return left.count() <= 0 ? 0 : static_cast<int>(std::min<long long>(left.count(), 1000 * 60));
+  return static_cast<int>(std::clamp<long long>(left.count(), 0, 60 * 1000));
 }
 
-// Reads `fd` until end of file or the deadline; false when the deadline passed first.
-bool read_until_eof(int fd, std::string& out, double timeout_s) {
-  const bool limited = timeout_s > 0;
-  const auto deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                         std::chrono::duration<double>(limited ? timeout_s : 0));
-  char buffer[1 << 16];
-  for (;;) {
-    if (limited && Clock::now() >= deadline) return false;
-    pollfd p{fd, POLLIN, 0};
-    const int ready = ::poll(&p, 1, wait_ms(limited, deadline));
-    if (ready < 0 && errno == EINTR) continue;
-    if (ready == 0) continue;  // the deadline is checked above
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n > 0) {
-      out.append(buffer, static_cast<std::size_t>(n));
-    } else if (n == 0 || errno != EINTR) {
+// Writes all of `text`; false when the worker is gone (EPIPE: SIGPIPE is ignored, see start).
+bool write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// Moves the complete lines of `buffer` before the end line into `out`; true once the end line
+// was seen (its status in `status`, the bytes after it left in `buffer`).
+bool take_lines(std::string& buffer, JobOutcome& out) {
+  std::size_t start = 0;
+  for (auto nl = buffer.find('\n'); nl != std::string::npos; nl = buffer.find('\n', start)) {
+    std::string line = buffer.substr(start, nl - start);
+    start = nl + 1;
+    if (line.rfind(kJobEnd, 0) == 0) {
+      const std::size_t rest = std::string(kJobEnd).size();
+      out.end_status = line.size() > rest + 1 ? line.substr(rest + 1) : "";
+      buffer.erase(0, start);
       return true;
     }
+    out.lines.push_back(std::move(line));
   }
-}
-
-int wait_for(pid_t pid) {
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return status;
+  buffer.erase(0, start);
+  return false;
 }
 
 }  // namespace
 
-WorkerOutcome run_worker(const std::vector<std::string>& args, double timeout_s) {
-  WorkerOutcome outcome;
-  int fds[2];
-  // Close-on-exec: a worker started by another thread must not hold this pipe open.
-  if (::pipe2(fds, O_CLOEXEC) != 0) {
-    outcome.spawn_error = std::string("cannot create a pipe: ") + std::strerror(errno);
-    return outcome;
+WorkerProcess::~WorkerProcess() {
+  if (pid_ > 0) reap();
+}
+
+bool WorkerProcess::start(std::string& error) {
+  // This process ignores SIGPIPE (a write to a dead worker is an EPIPE); its workers must not.
+  ::signal(SIGPIPE, SIG_IGN);
+  int in[2], out[2];
+  // Close-on-exec: a worker started by another thread must not hold these pipes open.
+  if (::pipe2(in, O_CLOEXEC) != 0) {
+    error = std::string("cannot create a pipe: ") + std::strerror(errno);
+    return false;
+  }
+  if (::pipe2(out, O_CLOEXEC) != 0) {
+    error = std::string("cannot create a pipe: ") + std::strerror(errno);
+    ::close(in[0]);
+    ::close(in[1]);
+    return false;
   }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  sigset_t defaults;
+  sigemptyset(&defaults);
+  sigaddset(&defaults, SIGPIPE);
+  posix_spawnattr_setsigdefault(&attr, &defaults);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
   std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  for (const std::string& a : args_) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
+  const int rc = ::posix_spawn(&pid_, "/proc/self/exe", &actions, &attr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
-  ::close(fds[1]);
+  posix_spawnattr_destroy(&attr);
+  ::close(in[0]);
+  ::close(out[1]);
+  to_worker_ = in[1];
+  from_worker_ = out[0];
   if (rc != 0) {
-    ::close(fds[0]);
-    outcome.spawn_error = std::string("cannot start a worker process: ") + std::strerror(rc);
-    return outcome;
+    pid_ = -1;
+    reap();
+    error = std::string("cannot start a worker process: ") + std::strerror(rc);
+    return false;
   }
-  if (!read_until_eof(fds[0], outcome.output, timeout_s)) {
-    outcome.timed_out = true;
-    ::kill(pid, SIGKILL);
+  return true;
+}
+
+int WorkerProcess::reap() {
+  if (to_worker_ >= 0) ::close(to_worker_);
+  if (from_worker_ >= 0) ::close(from_worker_);
+  to_worker_ = from_worker_ = -1;
+  buffer_.clear();
+  int status = 0;
+  if (pid_ > 0) {
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
   }
-  ::close(fds[0]);
-  outcome.wait_status = wait_for(pid);
+  pid_ = -1;
+  return status;
+}
+
+JobOutcome WorkerProcess::run(const std::string& job, double timeout_s) {
+  JobOutcome outcome;
+  if (pid_ < 0 && !start(outcome.spawn_error)) return outcome;
+  const bool limited = timeout_s > 0;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(limited ? timeout_s : 0));
+  bool alive = write_all(to_worker_, job + "\n");
+  char chunk[1 << 16];
+  while (alive && !(outcome.finished = take_lines(buffer_, outcome))) {
+    if (limited && Clock::now() >= deadline) {
+      outcome.timed_out = true;
+      ::kill(pid_, SIGKILL);
+      break;
+    }
+    pollfd p{from_worker_, POLLIN, 0};
+    if (::poll(&p, 1, wait_ms(limited, deadline)) <= 0) continue;  // EINTR or the deadline
+    const ssize_t n = ::read(from_worker_, chunk, sizeof chunk);
+    if (n > 0) {
+      buffer_.append(chunk, static_cast<std::size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      alive = false;  // end of file: the worker died
+    }
+  }
+  if (!outcome.finished) outcome.wait_status = reap();
   return outcome;
 }
 
-std::string describe_worker_end(const WorkerOutcome& w, double timeout_s) {
+std::string describe_worker_end(const JobOutcome& w, double timeout_s) {
   if (!w.spawn_error.empty()) return w.spawn_error;
   if (w.timed_out) {
     return "timed out after " + format_double(timeout_s) + " s (--pair-timeout) and was killed";

@@ -105,11 +105,14 @@ TEST_F(BatchHostile, APairThatCrashesIsItsErrorRowAndTheBatchGoesOn) {
 }
 
 TEST_F(BatchHostile, AnAbortAndAHangAreErrorRowsToo) {
-  write_list({"blob4_colnoise.off", "blob4_geonoise.off"});
+  // One job at a time: the pair after the abort is scored by a new worker.
+  write_list({"blob4_colnoise.off", "blob4_geonoise.off", "blob4_bothnoise.off"});
   CliRun r = qm3d(batch(), "QM3D_TEST_FAULT=abort:blob4_geonoise.off");
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(read_rows(results_).by_name["blob4_geonoise.off"].second,
-            "crashed: signal 6 (SIGABRT)");
+  Rows rows = read_rows(results_);
+  EXPECT_EQ(rows.by_name["blob4_geonoise.off"].second, "crashed: signal 6 (SIGABRT)");
+  EXPECT_EQ(rows.by_name["blob4_colnoise.off"].first, "ok");
+  EXPECT_EQ(rows.by_name["blob4_bothnoise.off"].first, "ok");
   // Alone in its list: under --pair-timeout, a slow machine must not time out another pair.
   write_list({"blob4_geonoise.off"});
   r = qm3d(batch("--overwrite --pair-timeout 2"), "QM3D_TEST_FAULT=hang:blob4_geonoise.off");
