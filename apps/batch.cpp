@@ -1,10 +1,10 @@
 #include "batch.h"
 
-#include <CLI/CLI.hpp>
 #include <omp.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -77,6 +77,13 @@ struct ScoredRow {
   std::optional<Input> reference, distorted;
 };
 
+ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std::string& error) {
+  ScoredRow s;
+  s.row = csv_error_row(pair.reference, pair.distorted, metric, error);
+  s.failed = true;
+  return s;
+}
+
 // Scores one pair; never throws (a failure becomes the row's error).
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
@@ -92,11 +99,9 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     if (!o.report_dir.empty()) s.result = std::move(result);
     return s;
   } catch (const std::bad_alloc&) {
-    return {csv_error_row(pair.reference, pair.distorted, metric, "out of memory"), true,
-            nullptr, std::nullopt, std::nullopt, std::nullopt};
+    return failed_row(pair, metric, "out of memory");
   } catch (const std::exception& e) {
-    return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true, nullptr,
-            std::nullopt, std::nullopt, std::nullopt};
+    return failed_row(pair, metric, e.what());
   }
 }
 
@@ -201,8 +206,8 @@ std::vector<PairJob> group_jobs(const std::vector<std::pair<ListPair, std::strin
   std::vector<PairJob> jobs;
   std::map<std::pair<std::string, std::string>, std::size_t> job_of_pair;
   for (const auto& [pair, metric] : todo) {
-    const auto [it, fresh] = job_of_pair.emplace(std::pair(pair.reference, pair.distorted),
-                                                 jobs.size());
+    const auto [it, fresh] =
+        job_of_pair.emplace(std::pair(pair.reference, pair.distorted), jobs.size());
     if (by_pair && !fresh) {
       jobs[it->second].metrics.push_back(metric);
     } else {
@@ -260,8 +265,8 @@ void stop_if_stopped_from_outside(const JobOutcome& w) {
 // Scores a job in a worker process: the rows it wrote, and for each row it did not write (it
 // crashed, aborted, ran out of memory or time) an error row saying how it ended. False when
 // the worker wrote every row but a report failed (said on stderr by the worker).
-bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads,
-                     const BatchOptions& o, const RowDone& done) {
+bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, const BatchOptions& o,
+                     const RowDone& done) {
   const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s);
   stop_if_stopped_from_outside(w);
   std::map<std::string, std::string> rows;  // metric -> row
@@ -490,8 +495,7 @@ void run_worker_job(const BatchOptions& o, const std::string& line) {
     std::cout << row << "\n" << std::flush;
   });
   for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
-  std::cout << kJobEnd << (reports.errors().empty() ? "" : " report-failed") << "\n"
-            << std::flush;
+  std::cout << kJobEnd << (reports.errors().empty() ? "" : " report-failed") << "\n" << std::flush;
 }
 
 }  // namespace

@@ -39,7 +39,7 @@ struct BatchOptions {
   /// batch's end. The workers run `program` with the hidden --batch-worker and `command_line`.
   bool isolate = true;
   double pair_timeout_s = 0;  ///< kill a worker after this long (isolate only); 0 = no limit
-  std::string program;                    ///< argv[0]
+  std::string program;        ///< argv[0]
   std::vector<std::string> command_line;  ///< argv[1..]: this batch's own arguments
 };
 

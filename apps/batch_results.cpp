@@ -76,10 +76,9 @@ void lock(int fd, const std::filesystem::path& path) {
 
 int open_for_append(const std::filesystem::path& path, int extra_flags) {
   // O_NONBLOCK: a FIFO without a reader fails (ENXIO) instead of blocking; cleared after.
-  const int fd = ::open(path.c_str(),
-                        O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOCTTY | O_NONBLOCK |
-                            extra_flags,
-                        0644);
+  const int fd =
+      ::open(path.c_str(),
+             O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | extra_flags, 0644);
   if (fd < 0) {
     throw InputError(path.string() + ": cannot open for writing: " + std::strerror(errno));
   }
@@ -137,9 +136,8 @@ std::string settings_difference(const std::string& recorded, const std::string& 
     const auto it = now.find(name);
     const std::string new_value = it == now.end() ? "" : it->second;
     if (old_value == new_value) continue;
-    out += (out.empty() ? "" : "; ") + name + ": " +
-           (old_value.empty() ? "default" : old_value) + " in " + file + ", " +
-           (new_value.empty() ? "default" : new_value) + " in this run";
+    out += (out.empty() ? "" : "; ") + name + ": " + (old_value.empty() ? "default" : old_value) +
+           " in " + file + ", " + (new_value.empty() ? "default" : new_value) + " in this run";
   }
   return out.empty() ? "\"" + recorded + "\" in " + file + ", \"" + current + "\" now" : out;
 }
@@ -169,8 +167,7 @@ void LockedResults::truncate() {
 }
 
 void LockedResults::replace(const std::string& text) {
-  const std::filesystem::path temp =
-      path_.string() + ".qm3d-tmp-" + std::to_string(::getpid());
+  const std::filesystem::path temp = path_.string() + ".qm3d-tmp-" + std::to_string(::getpid());
   const int fd = open_for_append(temp, O_EXCL | O_NOFOLLOW);
   const auto fail = [&](const std::string& what) {
     ::close(fd);

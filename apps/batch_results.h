@@ -59,10 +59,10 @@ class LockedResults {
 
 /// What --resume reads from an existing results file.
 struct ResumeState {
-  std::set<RowKey> done;       ///< rows not to score again
-  std::string kept_text;       ///< the file without the rows to score again (--retry-failed)
-  std::size_t retried = 0;     ///< error rows dropped for scoring again
-  bool has_header = false;     ///< false: the file is empty
+  std::set<RowKey> done;    ///< rows not to score again
+  std::string kept_text;    ///< the file without the rows to score again (--retry-failed)
+  std::size_t retried = 0;  ///< error rows dropped for scoring again
+  bool has_header = false;  ///< false: the file is empty
 };
 
 /// Reads `text`, the content of `file` (a trailing partial line already cut). @throws

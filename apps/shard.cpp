@@ -4,9 +4,9 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -96,8 +96,8 @@ ListColumns list_columns(const std::vector<std::string>& fields, const std::stri
   return c;
 }
 
-ListPair list_pair(const std::vector<std::string>& f, const ListColumns& c,
-                   const std::string& name, std::size_t line_no) {
+ListPair list_pair(const std::vector<std::string>& f, const ListColumns& c, const std::string& name,
+                   std::size_t line_no) {
   const auto field = [&](std::size_t i) { return i < f.size() ? f[i] : std::string(); };
   ListPair p{field(c.reference), field(c.distorted), field(c.metric)};
   if (f.size() > c.count || p.reference.empty() || p.distorted.empty()) {
@@ -330,9 +330,8 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
     if (kept.fields[status_column] == "ok" && !is_finite_number(kept.fields[score_column])) {
       // A row that says ok without a score is not a result: kept as the error it is.
       kept.fields[status_column] = "error";
-      kept.fields[error_column] = "merge: status ok but the score \"" +
-                                  kept.fields[score_column] + "\" is not a finite number (" +
-                                  where(kept) + ")";
+      kept.fields[error_column] = "merge: status ok but the score \"" + kept.fields[score_column] +
+                                  "\" is not a finite number (" + where(kept) + ")";
       kept.fields[score_column].clear();
       kept.line = csv_line(kept.fields);
     }

@@ -2,13 +2,12 @@
 // its process, a resume with other settings, onto the list or an unrelated file, a second batch
 // on the same results, error rows left behind, lists with a BOM or reordered columns, shards
 // with a non-number score or missing.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <fcntl.h>
 
 #include <fstream>
 #include <map>
@@ -191,8 +190,8 @@ TEST_F(BatchHostile, ResumeExitsNonZeroWhileErrorRowsRemain) {
   write_list({"blob4_colnoise.off"});
   std::ofstream(list_, std::ios::app) << mesh("blob4_ref.off") << ",missing.off,cmdm\n";
   ASSERT_EQ(qm3d(batch()).code, 2);
-  const CliRun resumed = qm3d("batch '" + list_.string() + "' -o '" + results_.string() +
-                              "' --resume");
+  const CliRun resumed =
+      qm3d("batch '" + list_.string() + "' -o '" + results_.string() + "' --resume");
   EXPECT_EQ(resumed.code, 2);
   EXPECT_NE(resumed.err.find("1 rows of " + results_.string() + " record an error"),
             std::string::npos)
@@ -236,7 +235,8 @@ TEST_F(BatchHostile, ASecondBatchOnLockedResultsIsRefused) {
 // ---- lists ---------------------------------------------------------------------------------
 
 TEST_F(BatchHostile, ListWithABomAndReorderedColumnsReadsByTheHeaderNames) {
-  std::ofstream(list_) << "\xEF\xBB\xBF" << "distorted,reference,metric\n"
+  std::ofstream(list_) << "\xEF\xBB\xBF"
+                       << "distorted,reference,metric\n"
                        << mesh("blob4_colnoise.off") << "," << mesh("blob4_ref.off") << ",cmdm\n";
   const CliRun r = qm3d(batch());
   EXPECT_EQ(r.code, 0) << r.err << slurp(results_);

@@ -148,8 +148,10 @@ TEST(PairList, ReadsLikeBatch) {
 }
 
 TEST(PairList, HeaderNamesTheColumnsAndABomIsIgnored) {
-  const auto pairs = parse_pair_list("\xEF\xBB\xBF" "Distorted,metric,reference\nb.ply,pcqm,a.ply\n",
-                                     "list.csv");
+  const auto pairs = parse_pair_list(
+      "\xEF\xBB\xBF"
+      "Distorted,metric,reference\nb.ply,pcqm,a.ply\n",
+      "list.csv");
   ASSERT_EQ(pairs.size(), 1u);
   EXPECT_EQ(pairs[0].reference, "a.ply");
   EXPECT_EQ(pairs[0].distorted, "b.ply");
@@ -290,9 +292,9 @@ TEST(Merge, RejectsFilesThatAreNotBatchResults) {
 }
 
 TEST(Merge, ANonNumberScoreWithStatusOkIsAnErrorRow) {
-  const MergeResult m = merge_results(keys({{"a", "cmdm"}, {"b", "cmdm"}}),
-                                      {file("OUT_0.csv", {row("a", "cmdm", "garbage"),
-                                                          row("b", "cmdm", "")})});
+  const MergeResult m =
+      merge_results(keys({{"a", "cmdm"}, {"b", "cmdm"}}),
+                    {file("OUT_0.csv", {row("a", "cmdm", "garbage"), row("b", "cmdm", "")})});
   ASSERT_EQ(m.rows.size(), 2u);
   ASSERT_EQ(m.failed.size(), 2u);
   EXPECT_EQ(m.rows[0],
@@ -302,8 +304,8 @@ TEST(Merge, ANonNumberScoreWithStatusOkIsAnErrorRow) {
 
 TEST(Merge, RowsScoredWithOtherSettingsAreRefused) {
   const auto with_settings = [](const std::string& name, const std::string& settings) {
-    return ResultFile{name, std::string(kHeader) + ",settings\n" + row("a", "cmdm", "0.5") +
-                                "," + settings + "\n"};
+    return ResultFile{name, std::string(kHeader) + ",settings\n" + row("a", "cmdm", "0.5") + "," +
+                                settings + "\n"};
   };
   EXPECT_NO_THROW(merge_results(keys({{"a", "cmdm"}}), {with_settings("OUT_0.csv", "defaults"),
                                                         with_settings("OUT_1.csv", "defaults")}));
