@@ -350,9 +350,15 @@ std::set<RowKey> prepare_output(LockedResults& out, const BatchOptions& o,
   return state.done;
 }
 
+// What score_jobs did.
+struct ScoringSummary {
+  std::size_t failed_rows = 0;  ///< rows of this run that record an error
+  bool reports_ok = true;       ///< false: a report could not be written (said on stderr)
+};
+
 // Scores the rows of `todo`, o.jobs jobs at a time, appending each row to `out` as it is done.
-// False when a report could not be written (said on stderr).
-bool score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo,
+// Throws InputError when a row cannot be written (the jobs stop; the rows written stay).
+ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo,
                 LockedResults& out, const std::string& settings) {
   // A worker process writes its pair's report itself; here only the folder is made.
   PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
@@ -365,11 +371,20 @@ bool score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std
   const int job_threads = std::max(1, total_threads / concurrent);
   const BatchOptions per_job = job_options(o, job_threads);
   const std::string settings_field = "," + csv_field(settings);
+  std::atomic<std::size_t> next{0};
+  std::mutex write_error_mutex;
+  std::string write_error;  // the first row that could not be written
   const RowDone done = [&](const std::string& row, bool failed) {
-    out.write_line(row + settings_field);
+    try {
+      out.write_line(row + settings_field);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(write_error_mutex);
+      if (write_error.empty()) write_error = e.what();
+      next = jobs.size();  // no job starts after a failed write
+      return;
+    }
     progress.done_one(failed);
   };
-  std::atomic<std::size_t> next{0};
   std::atomic<bool> workers_ok{true};
   auto worker = [&] {
     if (!o.isolate) omp_set_num_threads(job_threads);
@@ -386,23 +401,24 @@ bool score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std
   for (int j = 1; j < concurrent; ++j) threads.emplace_back(worker);
   worker();
   for (auto& t : threads) t.join();
+  if (!write_error.empty()) throw InputError(write_error);
   reports.write_index(o.output);
   for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
-  return reports.errors().empty() && workers_ok;
+  return {progress.failed(), reports.errors().empty() && workers_ok};
 }
 
 // The exit code: 2 while any row of the results (this run's or an earlier one's) records an
 // error, or a report failed.
-int finish(const BatchOptions& o, bool reports_ok) {
+int finish(const BatchOptions& o, const ScoringSummary& run) {
   std::error_code ec;
   const std::size_t errors = std::filesystem::is_regular_file(o.output, ec)
                                  ? count_error_rows(read_file_bytes(o.output))
-                                 : 0;
+                                 : run.failed_rows;  // a pipe or device: this run's rows
   if (errors > 0 && !o.quiet) {
     std::cerr << "batch: " << errors << " rows of " << o.output.string()
               << " record an error; `--resume --retry-failed` scores them again\n";
   }
-  return errors == 0 && reports_ok ? 0 : 2;
+  return errors == 0 && run.reports_ok ? 0 : 2;
 }
 
 }  // namespace
@@ -452,8 +468,7 @@ int run_batch(const BatchOptions& o) {
     std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
               << todo.size() << " to go\n";
   }
-  const bool ok = score_jobs(o, todo, out, settings);
-  return finish(o, ok);
+  return finish(o, score_jobs(o, todo, out, settings));
 }
 
 void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {

@@ -214,7 +214,8 @@ int run(int argc, char** argv) {
                    "compare (one row per metric that applies) or auto (the first that applies: "
                    "CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's "
                    "folder). Each row is appended to RESULTS as soon as it is done; a failing "
-                   "pair records its error in its row");
+                   "pair records its error in its row, also one that crashes (pairs are scored "
+                   "in worker processes). Exit code 2 while a row of RESULTS records an error");
   add_global_options(batch_cmd, global);
   batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
   batch_cmd->add_option("-o,--output", results, "Results CSV")->required()->type_name("RESULTS.csv");
