@@ -222,7 +222,10 @@ int run(int argc, char** argv) {
   batch_cmd->add_option("-j,--jobs", batch.jobs, "Pairs scored at the same time")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
-  batch_cmd->add_flag("--resume", batch.resume, "Skip the pairs already in RESULTS");
+  batch_cmd->add_flag(
+      "--resume", batch.resume,
+      "Skip the pairs already in RESULTS (scored with the same settings; error rows "
+      "too, unless --retry-failed)");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
   add_batch_safety_options(batch_cmd, batch);
   add_run_options(batch_cmd, batch_run, nullptr);
