@@ -11,6 +11,7 @@
 
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "cli_runner.h"
@@ -118,6 +119,32 @@ TEST_F(BatchHostile, AnAbortAndAHangAreErrorRowsToo) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(read_rows(results_).by_name["blob4_geonoise.off"].second,
             "timed out after 2 s (--pair-timeout) and was killed");
+}
+
+// Isolation changes where a pair is scored, not its row: the same rows (every column but
+// seconds) with and without worker processes, for a compare pair (several rows per pair).
+TEST_F(BatchHostile, WorkersWriteTheRowsThisProcessWould) {
+  std::ofstream(list_) << mesh("blob4_ref.off") << "," << mesh("blob4_colnoise.off") << ",compare\n"
+                       << mesh("blob4_ref.off") << ",missing.off,cmdm\n";
+  const auto rows_without_seconds = [&](const std::string& extra) {
+    fs::remove(results_);
+    const CliRun r = qm3d(batch("--jobs 2 --points 500 " + extra));
+    EXPECT_EQ(r.code, 2) << r.err;
+    std::multiset<std::string> rows;
+    std::istringstream in(slurp(results_));
+    std::string line;
+    while (std::getline(in, line)) {
+      auto f = csv_split(line);
+      if (f.size() > 6) f[6].clear();  // seconds
+      std::string joined;
+      for (const auto& field : f) joined += field + "|";
+      rows.insert(joined);
+    }
+    return rows;
+  };
+  const auto isolated = rows_without_seconds("");
+  EXPECT_EQ(isolated.size(), 6u);  // header, 4 metrics of compare, the missing file
+  EXPECT_EQ(isolated, rows_without_seconds("--no-isolation"));
 }
 
 // A mesh with one face repeated 60,000 times crashed CMDM (a recursion too deep in the
