@@ -262,29 +262,27 @@ void stop_if_stopped_from_outside(const JobOutcome& w) {
   std::raise(sig);
 }
 
-// Scores a job in a worker process: the rows it wrote, and for each row it did not write (it
-// crashed, aborted, ran out of memory or time) an error row saying how it ended. False when
-// the worker wrote every row but a report failed (said on stderr by the worker).
+// Scores a job in a worker process: each row it writes, as it arrives, and for each row it did
+// not write (it crashed, aborted, ran out of memory or time) an error row saying how it ended.
+// False when the worker wrote every row but a report failed (said on stderr by the worker).
 bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, const BatchOptions& o,
                      const RowDone& done) {
-  const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s);
-  stop_if_stopped_from_outside(w);
-  std::map<std::string, std::string> rows;  // metric -> row
-  for (const std::string& line : w.lines) {
+  std::set<std::string> written;  // the job's metrics with a row
+  const auto take_row = [&](const std::string& line) {
     const auto f = csv_split(line);
-    if (f.size() > 4 && f[0] == job.pair.reference && f[1] == job.pair.distorted) {
-      rows.emplace(f[2], line);
+    if (f.size() > 4 && f[0] == job.pair.reference && f[1] == job.pair.distorted &&
+        std::count(job.metrics.begin(), job.metrics.end(), f[2]) > 0 &&
+        written.insert(f[2]).second) {
+      done(line, row_failed(line));
     }
-  }
+  };
+  const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s, take_row);
+  stop_if_stopped_from_outside(w);
   for (const std::string& metric : job.metrics) {
-    const auto it = rows.find(metric);
-    if (it != rows.end()) {
-      done(it->second, row_failed(it->second));
-    } else {
-      done(csv_error_row(job.pair.reference, job.pair.distorted, metric,
-                         describe_worker_end(w, o.pair_timeout_s)),
-           true);
-    }
+    if (written.count(metric) > 0) continue;
+    done(csv_error_row(job.pair.reference, job.pair.distorted, metric,
+                       describe_worker_end(w, o.pair_timeout_s)),
+         true);
   }
   return !w.finished || w.end_status.empty();
 }

@@ -40,9 +40,10 @@ bool write_all(int fd, const std::string& text) {
   return true;
 }
 
-// Moves the complete lines of `buffer` before the end line into `out`; true once the end line
-// was seen (its status in `status`, the bytes after it left in `buffer`).
-bool take_lines(std::string& buffer, JobOutcome& out) {
+// Gives the complete lines of `buffer` before the end line to `take`; true once the end line
+// was seen (its status in `out`, the bytes after it left in `buffer`).
+bool take_lines(std::string& buffer, JobOutcome& out,
+                const std::function<void(const std::string&)>& take) {
   std::size_t start = 0;
   for (auto nl = buffer.find('\n'); nl != std::string::npos; nl = buffer.find('\n', start)) {
     std::string line = buffer.substr(start, nl - start);
@@ -53,7 +54,7 @@ bool take_lines(std::string& buffer, JobOutcome& out) {
       buffer.erase(0, start);
       return true;
     }
-    out.lines.push_back(std::move(line));
+    take(line);
   }
   buffer.erase(0, start);
   return false;
@@ -124,7 +125,8 @@ int WorkerProcess::reap() {
   return status;
 }
 
-JobOutcome WorkerProcess::run(const std::string& job, double timeout_s) {
+JobOutcome WorkerProcess::run(const std::string& job, double timeout_s,
+                              const std::function<void(const std::string&)>& line) {
   JobOutcome outcome;
   if (pid_ < 0 && !start(outcome.spawn_error)) return outcome;
   const bool limited = timeout_s > 0;
@@ -132,7 +134,7 @@ JobOutcome WorkerProcess::run(const std::string& job, double timeout_s) {
                                            std::chrono::duration<double>(limited ? timeout_s : 0));
   bool alive = write_all(to_worker_, job + "\n");
   char chunk[1 << 16];
-  while (alive && !(outcome.finished = take_lines(buffer_, outcome))) {
+  while (alive && !(outcome.finished = take_lines(buffer_, outcome, line))) {
     if (limited && Clock::now() >= deadline) {
       outcome.timed_out = true;
       ::kill(pid_, SIGKILL);

@@ -8,6 +8,7 @@
 
 #include <sys/types.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,10 +17,8 @@ namespace qm3d::app {
 /// The line a worker writes after the output of each job: "<kJobEnd>" or "<kJobEnd> STATUS".
 inline constexpr const char* kJobEnd = "#qm3d-job-end";
 
-/// What one job left: the lines the worker wrote for it and, when it did not finish, how the
-/// worker ended.
+/// How one job ended: when it did not finish, how the worker ended.
 struct JobOutcome {
-  std::vector<std::string> lines;  ///< complete lines before the end line
   bool finished = false;           ///< the worker wrote the end line
   std::string end_status;          ///< what followed kJobEnd on the end line ("" = ok)
   int wait_status = 0;             ///< when not finished: as waitpid(2) reports the worker
@@ -37,10 +36,12 @@ class WorkerProcess {
   WorkerProcess(const WorkerProcess&) = delete;
   WorkerProcess& operator=(const WorkerProcess&) = delete;
 
-  /// Sends `job` (one line), starting the worker first when none runs, and collects its output
-  /// up to the end line; kills the worker when that takes over `timeout_s` seconds (positive).
-  /// Never throws for the worker's faults: they are in the outcome.
-  JobOutcome run(const std::string& job, double timeout_s);
+  /// Sends `job` (one line), starting the worker first when none runs, and gives each complete
+  /// line of its output to `line` as it arrives, up to the end line; kills the worker when that
+  /// takes over `timeout_s` seconds (positive). Never throws for the worker's faults: they are
+  /// in the outcome.
+  JobOutcome run(const std::string& job, double timeout_s,
+                 const std::function<void(const std::string&)>& line);
 
  private:
   bool start(std::string& error);
