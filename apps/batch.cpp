@@ -105,6 +105,15 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
   }
 }
 
+void make_report_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    throw InputError(dir.string() + ": cannot create the report folder (--report-dir)" +
+                     (ec ? ": " + ec.message() : std::string()));
+  }
+}
+
 // The reports of --report-dir: a pair's results are gathered until its last row of this run is
 // scored, then its report is written (by the worker that scored that row).
 class PairReports {
@@ -112,12 +121,7 @@ class PairReports {
   PairReports(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo)
       : o_(o) {
     if (o.report_dir.empty()) return;
-    std::error_code ec;
-    std::filesystem::create_directories(o.report_dir, ec);
-    if (ec || !std::filesystem::is_directory(o.report_dir)) {
-      throw InputError(o.report_dir.string() + ": cannot create the report folder (--report-dir)" +
-                       (ec ? ": " + ec.message() : std::string()));
-    }
+    make_report_dir(o.report_dir);
     for (const auto& [pair, metric] : todo) ++pending_[{pair.reference, pair.distorted}].left;
   }
 
@@ -315,11 +319,25 @@ BatchOptions job_options(const BatchOptions& o, int job_threads) {
   return per_job;
 }
 
-// The output must not be the list (--resume would find no rows, --overwrite would erase it).
-void refuse_list_as_output(const BatchOptions& o) {
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   std::error_code ec;
-  if (std::filesystem::equivalent(o.list, o.output, ec) && !ec) {
+  return std::filesystem::equivalent(a, b, ec) && !ec;
+}
+
+// The output must be none of the inputs: not the list (--resume would find no rows, --overwrite
+// would erase it), nor a file of a pair (--overwrite would erase it).
+void refuse_input_as_output(const BatchOptions& o, const std::vector<ListPair>& pairs) {
+  if (same_file(o.list, o.output)) {
     throw InputError(o.output.string() + ": is the list itself (LIST and -o name the same file)");
+  }
+  if (!std::filesystem::exists(o.output)) return;
+  for (const ListPair& p : pairs) {
+    for (const std::string& input : {p.reference, p.distorted}) {
+      if (same_file(resolve(o.list, input), o.output)) {
+        throw InputError(o.output.string() + ": is an input of the list (" + input +
+                         "), not a results file");
+      }
+    }
   }
 }
 
@@ -444,7 +462,8 @@ int run_batch(const BatchOptions& o) {
   if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
     return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
   });
-  refuse_list_as_output(o);
+  refuse_input_as_output(o, pairs);
+  if (!o.report_dir.empty()) make_report_dir(o.report_dir);  // before the output is touched
   if (o.retry_failed && !o.resume) throw std::invalid_argument("--retry-failed needs --resume");
   const bool exists = std::filesystem::exists(o.output);
   if (exists && !o.resume && !o.overwrite) {

@@ -33,6 +33,9 @@ bool same_file(const fs::path& a, const fs::path& b) {
 
 int run_merge(const MergeCommand& c, bool quiet) {
   const fs::path list(c.list);
+  if (same_file(list, c.output)) {
+    throw InputError(c.output + ": is the list itself (--list and -o name the same file)");
+  }
   std::vector<ResultKey> expected;
   for (const ListPair& pair : parse_pair_list(read_file_bytes(list), list.string())) {
     for (const std::string& metric : batch_metrics(pair, list)) {

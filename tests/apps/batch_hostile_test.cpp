@@ -240,6 +240,33 @@ TEST_F(BatchHostile, ResumeOntoTheListOrAnUnrelatedFileIsRefused) {
   EXPECT_EQ(slurp(results_), "subject,mos\ns1,3.5\n");
 }
 
+TEST_F(BatchHostile, AnInputOfTheListIsNeverTheOutput) {
+  const fs::path mesh_copy = dir_ / "ref.off";
+  fs::copy_file(mesh("blob4_ref.off"), mesh_copy);
+  std::ofstream(list_) << "ref.off," << mesh("blob4_colnoise.off") << ",cmdm\n";
+  const std::string before = slurp(mesh_copy);
+  CliRun r = qm3d("batch '" + list_.string() + "' -o '" + mesh_copy.string() + "' --overwrite");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is an input of the list (ref.off)"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(mesh_copy), before);
+  // merge: the list is not the output either.
+  const std::string list_text = slurp(list_);
+  r = qm3d("merge '" + results_.string() + "' -o '" + list_.string() + "' --list '" +
+           list_.string() + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is the list itself"), std::string::npos) << r.err;
+  EXPECT_EQ(slurp(list_), list_text);
+}
+
+TEST_F(BatchHostile, AnUnusableReportFolderIsFoundBeforeTheResultsAreTouched) {
+  write_list({"blob4_colnoise.off"});
+  std::ofstream(dir_ / "a_file") << "x";
+  const CliRun r = qm3d(batch("--report-dir '" + (dir_ / "a_file" / "reports").string() + "'"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cannot create the report folder"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(results_));
+}
+
 TEST_F(BatchHostile, ASecondBatchOnLockedResultsIsRefused) {
   write_list({"blob4_colnoise.off"});
   std::ofstream(list_, std::ios::app) << mesh("blob4_ref.off") << ",missing.off,cmdm\n";
