@@ -167,7 +167,11 @@ void LockedResults::truncate() {
 }
 
 void LockedResults::replace(const std::string& text) {
-  const std::filesystem::path temp = path_.string() + ".qm3d-tmp-" + std::to_string(::getpid());
+  // The file a symbolic link names is replaced, not the link.
+  std::error_code ec;
+  const std::filesystem::path target = std::filesystem::canonical(path_, ec);
+  if (ec) throw InputError(path_.string() + ": cannot resolve it: " + ec.message());
+  const std::filesystem::path temp = target.string() + ".qm3d-tmp-" + std::to_string(::getpid());
   const int fd = open_for_append(temp, O_EXCL | O_NOFOLLOW);
   const auto fail = [&](const std::string& what) {
     ::close(fd);
@@ -179,7 +183,7 @@ void LockedResults::replace(const std::string& text) {
       ::fsync(fd) != 0) {
     fail("cannot write a copy (disk full?)");
   }
-  if (::rename(temp.c_str(), path_.c_str()) != 0) fail("cannot replace it");
+  if (::rename(temp.c_str(), target.c_str()) != 0) fail("cannot replace it");
   // The old version stays locked: a batch that opened it before the rename must not take it.
   replaced_.push_back(fd_);
   fd_ = fd;

@@ -226,6 +226,19 @@ TEST_F(BatchHostile, ResumeExitsNonZeroWhileErrorRowsRemain) {
   EXPECT_EQ(read_rows(results_).count.size(), 2u);
 }
 
+TEST_F(BatchHostile, RetryFailedReplacesTheRowsOfTheFileALinkNames) {
+  write_list({"blob4_colnoise.off"});
+  std::ofstream(list_, std::ios::app) << mesh("blob4_ref.off") << ",missing.off,cmdm\n";
+  const fs::path real = dir_ / "real.csv";
+  fs::create_symlink(real, results_);
+  ASSERT_EQ(qm3d(batch("--overwrite")).code, 2);
+  EXPECT_EQ(qm3d(batch("--resume --retry-failed")).code, 2);  // missing.off fails again
+  EXPECT_TRUE(fs::is_symlink(results_));
+  const Rows rows = read_rows(real);
+  for (const auto& [key, n] : rows.count) EXPECT_EQ(n, 1) << key;
+  EXPECT_EQ(rows.count.size(), 2u);
+}
+
 TEST_F(BatchHostile, ResumeOntoTheListOrAnUnrelatedFileIsRefused) {
   write_list({"blob4_colnoise.off"});
   const std::string list_text = slurp(list_);
