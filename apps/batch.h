@@ -34,9 +34,10 @@ struct BatchOptions {
   /// metrics scored in this run (with --resume, not the rows already done).
   std::filesystem::path report_dir;
   ReportSettings report;  ///< how the reports are drawn (when report_dir is set)
-  /// Score each job (a row; with report_dir, a pair's rows) in a process of its own, so that a
-  /// fatal fault (signal, abort, memory, pair_timeout_s) is that job's error rows, not the
-  /// batch's end. The workers run `program` with the hidden --batch-worker and `command_line`.
+  /// Score the jobs (a row each; with report_dir, a pair's rows) in worker processes, one per
+  /// concurrent job, each scoring job after job and restarted after a fault, so that a fatal
+  /// fault (signal, abort, memory, pair_timeout_s) is that job's error rows, not the batch's
+  /// end. The workers run `program` with the hidden --batch-worker and `command_line`.
   bool isolate = true;
   double pair_timeout_s = 0;  ///< kill a worker after this long (isolate only); 0 = no limit
   std::string program;        ///< argv[0]
