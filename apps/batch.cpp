@@ -305,8 +305,15 @@ void test_fault(const ListPair& pair) {
     return;
   }
   const std::string kind = f.substr(0, colon);
-  if (kind == "segv") std::raise(SIGSEGV);
-  if (kind == "abort") std::abort();
+  // Default actions first: a sanitizer's handler would turn the signal into an exit code.
+  if (kind == "segv") {
+    std::signal(SIGSEGV, SIG_DFL);
+    std::raise(SIGSEGV);
+  }
+  if (kind == "abort") {
+    std::signal(SIGABRT, SIG_DFL);
+    std::abort();
+  }
   if (kind == "hang") {
     for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
   }
