@@ -1,13 +1,17 @@
 #include "batch.h"
 
-#include <fcntl.h>
 #include <omp.h>
-#include <unistd.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -16,7 +20,9 @@
 #include <thread>
 #include <tuple>
 
+#include "batch_results.h"
 #include "commands.h"
+#include "pair_process.h"
 #include "progress_display.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
@@ -24,52 +30,6 @@
 
 namespace qm3d::app {
 namespace {
-
-using Key = std::tuple<std::string, std::string, std::string>;
-
-// Keys of the rows already in the results; drops a trailing partial line left by a crash.
-std::set<Key> finished_pairs(const std::filesystem::path& output) {
-  std::string text = read_file_bytes(output);
-  const auto last_newline = text.find_last_of('\n');
-  const std::size_t complete = last_newline == std::string::npos ? 0 : last_newline + 1;
-  if (complete != text.size()) {
-    std::filesystem::resize_file(output, complete);
-    text.resize(complete);
-  }
-  std::set<Key> done;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto f = csv_split(line);
-    if (f.size() >= 3 && f[0] != "reference") done.emplace(f[0], f[1], f[2]);
-  }
-  return done;
-}
-
-// Appends one line with a single write(2), so a kill never leaves half a row.
-class RowWriter {
- public:
-  explicit RowWriter(const std::filesystem::path& path) : path_(path) {
-    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(path.string() + ": cannot open for writing");
-  }
-  ~RowWriter() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  void write_line(const std::string& row) {
-    const std::string line = row + "\n";
-    std::lock_guard<std::mutex> lock(mutex_);
-    const ssize_t n = ::write(fd_, line.data(), line.size());
-    if (n != static_cast<ssize_t>(line.size())) {
-      throw InputError(path_.string() + ": write failed (disk full?)");
-    }
-  }
-
- private:
-  std::filesystem::path path_;
-  int fd_ = -1;
-  std::mutex mutex_;
-};
 
 class Progress {
  public:
@@ -117,6 +77,13 @@ struct ScoredRow {
   std::optional<Input> reference, distorted;
 };
 
+ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std::string& error) {
+  ScoredRow s;
+  s.row = csv_error_row(pair.reference, pair.distorted, metric, error);
+  s.failed = true;
+  return s;
+}
+
 // Scores one pair; never throws (a failure becomes the row's error).
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
@@ -131,9 +98,19 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     ScoredRow s{csv_row(result), false, specs.front(), std::nullopt, r, d};
     if (!o.report_dir.empty()) s.result = std::move(result);
     return s;
+  } catch (const std::bad_alloc&) {
+    return failed_row(pair, metric, "out of memory");
   } catch (const std::exception& e) {
-    return {csv_error_row(pair.reference, pair.distorted, metric, e.what()), true, nullptr,
-            std::nullopt, std::nullopt, std::nullopt};
+    return failed_row(pair, metric, e.what());
+  }
+}
+
+void make_report_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    throw InputError(dir.string() + ": cannot create the report folder (--report-dir)" +
+                     (ec ? ": " + ec.message() : std::string()));
   }
 }
 
@@ -144,12 +121,7 @@ class PairReports {
   PairReports(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo)
       : o_(o) {
     if (o.report_dir.empty()) return;
-    std::error_code ec;
-    std::filesystem::create_directories(o.report_dir, ec);
-    if (ec || !std::filesystem::is_directory(o.report_dir)) {
-      throw InputError(o.report_dir.string() + ": cannot create the report folder (--report-dir)" +
-                       (ec ? ": " + ec.message() : std::string()));
-    }
+    make_report_dir(o.report_dir);
     for (const auto& [pair, metric] : todo) ++pending_[{pair.reference, pair.distorted}].left;
   }
 
@@ -226,6 +198,252 @@ class PairReports {
   std::vector<std::string> errors_;
 };
 
+// What one job scores: a row, or with --report-dir every row of a pair (its report shows them
+// together).
+struct PairJob {
+  ListPair pair;
+  std::vector<std::string> metrics;
+};
+
+std::vector<PairJob> group_jobs(const std::vector<std::pair<ListPair, std::string>>& todo,
+                                bool by_pair) {
+  std::vector<PairJob> jobs;
+  std::map<std::pair<std::string, std::string>, std::size_t> job_of_pair;
+  for (const auto& [pair, metric] : todo) {
+    const auto [it, fresh] =
+        job_of_pair.emplace(std::pair(pair.reference, pair.distorted), jobs.size());
+    if (by_pair && !fresh) {
+      jobs[it->second].metrics.push_back(metric);
+    } else {
+      jobs.push_back({pair, {metric}});
+    }
+  }
+  return jobs;
+}
+
+bool row_failed(const std::string& row) {
+  const auto f = csv_split(row);
+  return f.size() < 5 || f[4] != "ok";
+}
+
+/// Told each row as it is scored: the row (without the settings column) and whether it failed.
+using RowDone = std::function<void(const std::string& row, bool failed)>;
+
+// Scores a job's rows in this process (--no-isolation, and inside a worker).
+void score_here(const PairJob& job, const BatchOptions& per_job, PairReports& reports,
+                const RowDone& done) {
+  for (const std::string& metric : job.metrics) {
+    ScoredRow s = score_pair(job.pair, metric, per_job);
+    done(s.row, s.failed);
+    reports.add(job.pair, std::move(s));
+  }
+}
+
+// The workers' command line: this run's own arguments (the same options, list and report
+// folder) and the hidden --batch-worker.
+std::vector<std::string> worker_args(const BatchOptions& o) {
+  std::vector<std::string> args{o.program, "--batch-worker"};
+  args.insert(args.end(), o.command_line.begin(), o.command_line.end());
+  return args;
+}
+
+// The line that asks a worker for a job: threads, reference, distorted, metrics (CSV fields).
+std::string job_line(const PairJob& job, int threads) {
+  std::string line = std::to_string(threads) + "," + csv_field(job.pair.reference) + "," +
+                     csv_field(job.pair.distorted);
+  for (const std::string& m : job.metrics) line += "," + csv_field(m);
+  return line;
+}
+
+// A worker ended by SIGINT, SIGTERM, SIGHUP or SIGQUIT was stopped with its batch (Ctrl-C
+// reaches the whole process group, scancel every process of the job), not by its pair: no row
+// is written for it (--resume scores it again) and the batch ends by the same signal.
+void stop_if_stopped_from_outside(const JobOutcome& w) {
+  if (w.finished || w.timed_out || !WIFSIGNALED(w.wait_status)) return;
+  const int sig = WTERMSIG(w.wait_status);
+  if (sig != SIGINT && sig != SIGTERM && sig != SIGHUP && sig != SIGQUIT) return;
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+// Scores a job in a worker process: each row it writes, as it arrives, and for each row it did
+// not write (it crashed, aborted, ran out of memory or time) an error row saying how it ended.
+// False when the worker wrote every row but a report failed (said on stderr by the worker).
+bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, const BatchOptions& o,
+                     const RowDone& done) {
+  std::set<std::string> written;  // the job's metrics with a row
+  const auto take_row = [&](const std::string& line) {
+    const auto f = csv_split(line);
+    if (f.size() > 4 && f[0] == job.pair.reference && f[1] == job.pair.distorted &&
+        std::count(job.metrics.begin(), job.metrics.end(), f[2]) > 0 &&
+        written.insert(f[2]).second) {
+      done(line, row_failed(line));
+    }
+  };
+  const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s, take_row);
+  stop_if_stopped_from_outside(w);
+  for (const std::string& metric : job.metrics) {
+    if (written.count(metric) > 0) continue;
+    done(csv_error_row(job.pair.reference, job.pair.distorted, metric,
+                       describe_worker_end(w, o.pair_timeout_s)),
+         true);
+  }
+  return !w.finished || w.end_status.empty();
+}
+
+// Test hook, for tests/apps/batch_hostile_test.cpp only: QM3D_TEST_FAULT=KIND:NAME makes a
+// worker fail as a crashing metric would on a pair whose distorted file is named NAME: KIND
+// segv (SIGSEGV), abort (SIGABRT) or hang (never returns), so that the tests need no input that
+// crashes a metric (such inputs get fixed).
+void test_fault(const ListPair& pair) {
+  const char* fault = std::getenv("QM3D_TEST_FAULT");
+  if (fault == nullptr) return;
+  const std::string f(fault);
+  const auto colon = f.find(':');
+  if (colon == std::string::npos ||
+      std::filesystem::path(pair.distorted).filename() != f.substr(colon + 1)) {
+    return;
+  }
+  const std::string kind = f.substr(0, colon);
+  // Default actions first: a sanitizer's handler would turn the signal into an exit code.
+  if (kind == "segv") {
+    std::signal(SIGSEGV, SIG_DFL);
+    std::raise(SIGSEGV);
+  }
+  if (kind == "abort") {
+    std::signal(SIGABRT, SIG_DFL);
+    std::abort();
+  }
+  if (kind == "hang") {
+    for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+  }
+}
+
+BatchOptions job_options(const BatchOptions& o, int job_threads) {
+  BatchOptions per_job = o;
+  per_job.request.run.threads = job_threads;
+  per_job.request.keep_per_element = !o.report_dir.empty();
+  return per_job;
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  return std::filesystem::equivalent(a, b, ec) && !ec;
+}
+
+// The output must be none of the inputs: not the list (--resume would find no rows, --overwrite
+// would erase it), nor a file of a pair (--overwrite would erase it).
+void refuse_input_as_output(const BatchOptions& o, const std::vector<ListPair>& pairs) {
+  if (same_file(o.list, o.output)) {
+    throw InputError(o.output.string() + ": is the list itself (LIST and -o name the same file)");
+  }
+  if (!std::filesystem::exists(o.output)) return;
+  for (const ListPair& p : pairs) {
+    for (const std::string& input : {p.reference, p.distorted}) {
+      if (same_file(resolve(o.list, input), o.output)) {
+        throw InputError(o.output.string() + ": is an input of the list (" + input +
+                         "), not a results file");
+      }
+    }
+  }
+}
+
+// Opens, checks and prepares the results file: the rows --resume keeps (the error rows dropped
+// with --retry-failed) and the header when the file is new.
+std::set<RowKey> prepare_output(LockedResults& out, const BatchOptions& o,
+                                const std::string& settings, bool existed) {
+  ResumeState state;
+  if (existed && o.resume) {
+    if (!out.is_regular()) {
+      throw InputError(o.output.string() + ": not a regular file (--resume continues a file)");
+    }
+    std::string text = read_file_bytes(o.output);
+    const auto last_newline = text.find_last_of('\n');
+    const std::size_t complete = last_newline == std::string::npos ? 0 : last_newline + 1;
+    if (complete != text.size()) {  // a partial last line left by a kill
+      std::filesystem::resize_file(o.output, complete);
+      text.resize(complete);
+    }
+    state = read_resume(text, o.output.string(), settings, o.retry_failed);
+    if (state.retried > 0) out.replace(state.kept_text);
+  } else if (existed) {
+    out.truncate();  // --overwrite
+  }
+  if (!state.has_header) out.write_line(batch_header());
+  return state.done;
+}
+
+// What score_jobs did.
+struct ScoringSummary {
+  std::size_t failed_rows = 0;  ///< rows of this run that record an error
+  bool reports_ok = true;       ///< false: a report could not be written (said on stderr)
+};
+
+// Scores the rows of `todo`, o.jobs jobs at a time, appending each row to `out` as it is done.
+// Throws InputError when a row cannot be written (the jobs stop; the rows written stay).
+ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo,
+                LockedResults& out, const std::string& settings) {
+  // A worker process writes its pair's report itself; here only the folder is made.
+  PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
+  const std::vector<PairJob> jobs = group_jobs(todo, !o.report_dir.empty());
+  Progress progress(std::max<std::size_t>(todo.size(), 1), o.quiet || todo.empty());
+  const int concurrent = std::max(1, std::min<int>(o.jobs, static_cast<int>(jobs.size())));
+  const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
+  // Each job gets its share of the threads, passed to every metric explicitly (a metric's own
+  // concurrent tasks then share that count too).
+  const int job_threads = std::max(1, total_threads / concurrent);
+  const BatchOptions per_job = job_options(o, job_threads);
+  const std::string settings_field = "," + csv_field(settings);
+  std::atomic<std::size_t> next{0};
+  std::mutex write_error_mutex;
+  std::string write_error;  // the first row that could not be written
+  const RowDone done = [&](const std::string& row, bool failed) {
+    try {
+      out.write_line(row + settings_field);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(write_error_mutex);
+      if (write_error.empty()) write_error = e.what();
+      next = jobs.size();  // no job starts after a failed write
+      return;
+    }
+    progress.done_one(failed);
+  };
+  std::atomic<bool> workers_ok{true};
+  auto worker = [&] {
+    if (!o.isolate) omp_set_num_threads(job_threads);
+    WorkerProcess process(worker_args(o));  // started by its first job
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      if (!o.isolate) {
+        score_here(jobs[i], per_job, reports, done);
+      } else if (!score_in_worker(jobs[i], process, job_threads, o, done)) {
+        workers_ok = false;
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 1; j < concurrent; ++j) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  if (!write_error.empty()) throw InputError(write_error);
+  reports.write_index(o.output);
+  for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
+  return {progress.failed(), reports.errors().empty() && workers_ok};
+}
+
+// The exit code: 2 while any row of the results (this run's or an earlier one's) records an
+// error, or a report failed.
+int finish(const BatchOptions& o, const ScoringSummary& run) {
+  std::error_code ec;
+  const std::size_t errors = std::filesystem::is_regular_file(o.output, ec)
+                                 ? count_error_rows(read_file_bytes(o.output))
+                                 : run.failed_rows;  // a pipe or device: this run's rows
+  if (errors > 0 && !o.quiet) {
+    std::cerr << "batch: " << errors << " rows of " << o.output.string()
+              << " record an error; `--resume --retry-failed` scores them again\n";
+  }
+  return errors == 0 && run.reports_ok ? 0 : 2;
+}
+
 }  // namespace
 
 std::filesystem::path resolve(const std::filesystem::path& list, const std::string& p) {
@@ -247,21 +465,21 @@ std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesyst
 }
 
 int run_batch(const BatchOptions& o) {
-  std::vector<ListPair> pairs =
-      parse_pair_list(read_file_bytes(o.list), o.list.string());
+  std::vector<ListPair> pairs = parse_pair_list(read_file_bytes(o.list), o.list.string());
   if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
     return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
   });
-  std::set<Key> done;
+  refuse_input_as_output(o, pairs);
+  if (!o.report_dir.empty()) make_report_dir(o.report_dir);  // before the output is touched
+  if (o.retry_failed && !o.resume) throw std::invalid_argument("--retry-failed needs --resume");
   const bool exists = std::filesystem::exists(o.output);
-  if (exists && o.resume) {
-    done = finished_pairs(o.output);
-  } else if (exists && !o.overwrite) {
+  if (exists && !o.resume && !o.overwrite) {
     throw InputError(o.output.string() +
                      ": already exists (use --resume to continue it or --overwrite to replace it)");
-  } else if (exists) {
-    std::filesystem::remove(o.output);
   }
+  const std::string settings = batch_settings(o.request);
+  LockedResults out(o.output);
+  std::set<RowKey> done = prepare_output(out, o, settings, exists);
   std::vector<std::pair<ListPair, std::string>> todo;
   std::size_t rows = 0;  // (pair, metric) rows the list asks for
   for (const ListPair& p : pairs) {
@@ -270,42 +488,64 @@ int run_batch(const BatchOptions& o) {
       if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
     }
   }
-  PairReports reports(o, todo);
-  RowWriter writer(o.output);
-  if (!exists || !o.resume || std::filesystem::file_size(o.output) == 0) {
-    writer.write_line(csv_header());
-  }
   if (!o.quiet && todo.size() < rows) {
     std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
               << todo.size() << " to go\n";
   }
-  Progress progress(std::max<std::size_t>(todo.size(), 1), o.quiet || todo.empty());
-  const int jobs = std::max(1, std::min<int>(o.jobs, static_cast<int>(todo.size())));
-  const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
-  std::atomic<std::size_t> next{0};
-  // Each job gets its share of the threads, passed to every metric explicitly (a metric's own
-  // concurrent tasks then share that count too).
-  BatchOptions per_job = o;
-  const int job_threads = std::max(1, total_threads / jobs);
-  per_job.request.run.threads = job_threads;
-  per_job.request.keep_per_element = !o.report_dir.empty();
-  auto worker = [&] {
-    omp_set_num_threads(job_threads);
-    for (std::size_t i = next++; i < todo.size(); i = next++) {
-      ScoredRow s = score_pair(todo[i].first, todo[i].second, per_job);
-      writer.write_line(s.row);
-      const bool failed = s.failed;
-      reports.add(todo[i].first, std::move(s));
-      progress.done_one(failed);
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
-  worker();
-  for (auto& t : threads) t.join();
-  reports.write_index(o.output);
+  return finish(o, score_jobs(o, todo, out, settings));
+}
+
+void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {
+  batch_cmd->add_flag("--retry-failed", o.retry_failed,
+                      "With --resume: score the rows that record an error again (their old rows "
+                      "are replaced)");
+  auto* timeout =
+      batch_cmd
+          ->add_option("--pair-timeout", o.pair_timeout_s,
+                       "Stop scoring a pair after this many seconds; its row records the "
+                       "timeout (default: no limit)")
+          ->check(CLI::PositiveNumber)
+          ->type_name("SECONDS");
+  batch_cmd
+      ->add_flag_function(
+          "--no-isolation", [&o](std::int64_t) { o.isolate = false; },
+          "Score the pairs inside this process instead of in worker processes (one per job, "
+          "restarted after a pair that crashed): saves a few milliseconds per pair, but a pair "
+          "that crashes ends the batch")
+      ->excludes(timeout);
+}
+
+namespace {
+
+// One job of a worker: its rows on stdout as they are scored, then the end line.
+void run_worker_job(const BatchOptions& o, const std::string& line) {
+  const auto f = csv_split(line);
+  if (f.size() < 4 || f[0].empty() || f[0].size() > 6 ||
+      f[0].find_first_not_of("0123456789") != std::string::npos) {
+    throw std::invalid_argument("--batch-worker: an internal option of qm3d batch");
+  }
+  const int threads = std::max(1, std::stoi(f[0]));
+  const PairJob job{{f[1], f[2], ""}, {f.begin() + 3, f.end()}};
+  std::vector<std::pair<ListPair, std::string>> todo;
+  for (const std::string& m : job.metrics) todo.emplace_back(job.pair, m);
+  omp_set_num_threads(threads);
+  PairReports reports(o, todo);
+  test_fault(job.pair);
+  score_here(job, job_options(o, threads), reports, [](const std::string& row, bool) {
+    std::cout << row << "\n" << std::flush;
+  });
   for (const std::string& e : reports.errors()) std::cerr << "qm3d: error: report: " << e << "\n";
-  return progress.failed() == 0 && reports.errors().empty() ? 0 : 2;
+  std::cout << kJobEnd << (reports.errors().empty() ? "" : " report-failed") << "\n" << std::flush;
+}
+
+}  // namespace
+
+int run_batch_worker(const BatchOptions& o) {
+  // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  std::string line;
+  while (std::getline(std::cin, line)) run_worker_job(o, line);
+  return 0;
 }
 
 }  // namespace qm3d::app

@@ -3,10 +3,16 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "commands.h"
 #include "html_report.h"
 #include "shard.h"
+
+namespace CLI {
+class App;
+}
 
 namespace qm3d::app {
 
@@ -17,7 +23,8 @@ struct BatchOptions {
   std::filesystem::path output;  ///< results CSV (appended to, row by row)
   int jobs = 1;                  ///< pairs scored at the same time
   int threads = 0;               ///< total threads (0 = all cores), shared among the jobs
-  bool resume = false;           ///< skip pairs already in `output`
+  bool resume = false;           ///< skip pairs already in `output` (same settings only)
+  bool retry_failed = false;     ///< with resume: score the error rows again (replacing them)
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
   ScoreRequest request;          ///< run options (threads set per job) and metric options
@@ -27,6 +34,14 @@ struct BatchOptions {
   /// metrics scored in this run (with --resume, not the rows already done).
   std::filesystem::path report_dir;
   ReportSettings report;  ///< how the reports are drawn (when report_dir is set)
+  /// Score the jobs (a row each; with report_dir, a pair's rows) in worker processes, one per
+  /// concurrent job, each scoring job after job and restarted after a fault, so that a fatal
+  /// fault (signal, abort, memory, pair_timeout_s) is that job's error rows, not the batch's
+  /// end. The workers run `program` with the hidden --batch-worker and `command_line`.
+  bool isolate = true;
+  double pair_timeout_s = 0;  ///< kill a worker after this long (isolate only); 0 = no limit
+  std::string program;        ///< argv[0]
+  std::vector<std::string> command_line;  ///< argv[1..]: this batch's own arguments
 };
 
 /// A list's relative path resolved against the list's folder.
@@ -38,8 +53,23 @@ std::filesystem::path resolve(const std::filesystem::path& list, const std::stri
 /// name as written (scoring them records why).
 std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesystem::path& list);
 
-/// Runs the batch. Returns 0 when every pair succeeded and 2 when some failed (their rows carry
-/// the error) or a report could not be written (said on stderr). Throws InputError / FormatError when the list or the output cannot be used.
+/// Runs the batch. The results hold batch_header()'s columns (batch_results.h); the output is
+/// locked while the batch runs. Returns 0 when every row of the results (this run's and, with
+/// --resume, earlier ones') is ok, 2 when some row records an error or a report could not be
+/// written (said on stderr). Throws InputError / FormatError when the list or the output cannot
+/// be used: the output is the list, is being written by another batch, exists (without
+/// --resume / --overwrite), or with --resume is not a batch results file or holds rows scored
+/// with other settings.
 int run_batch(const BatchOptions& options);
+
+/// Adds --retry-failed, --pair-timeout and --no-isolation to `batch_cmd`, parsed into `options`.
+void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& options);
+
+/// The worker of an isolated batch (`qm3d --batch-worker batch ...`, started by run_batch):
+/// reads jobs from stdin, one line each ("THREADS,REFERENCE,DISTORTED,METRIC..." as CSV
+/// fields), and for each writes its rows on stdout as soon as each is scored, writes the pair's
+/// report (report_dir), then the line kJobEnd (pair_process.h), followed by " report-failed"
+/// when the report could not be written. Returns 0 at the end of stdin.
+int run_batch_worker(const BatchOptions& options);
 
 }  // namespace qm3d::app

@@ -187,6 +187,8 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);
+  bool batch_worker = false;  // set only in a worker process of `qm3d batch` (batch.h)
+  app.add_flag("--batch-worker", batch_worker)->group("");
 
   // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
   std::vector<ScoreCommand> score_commands;
@@ -232,15 +234,20 @@ int run(int argc, char** argv) {
                    "compare (one row per metric that applies) or auto (the first that applies: "
                    "CMDM for two meshes, PCQM otherwise); relative paths are relative to LIST's "
                    "folder). Each row is appended to RESULTS as soon as it is done; a failing "
-                   "pair records its error in its row");
+                   "pair records its error in its row, also one that crashes (pairs are scored "
+                   "in worker processes). Exit code 2 while a row of RESULTS records an error");
   add_global_options(batch_cmd, global);
   batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
   batch_cmd->add_option("-o,--output", results, "Results CSV")->required()->type_name("RESULTS.csv");
   batch_cmd->add_option("-j,--jobs", batch.jobs, "Pairs scored at the same time")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
-  batch_cmd->add_flag("--resume", batch.resume, "Skip the pairs already in RESULTS");
+  batch_cmd->add_flag(
+      "--resume", batch.resume,
+      "Skip the pairs already in RESULTS (scored with the same settings; error rows "
+      "too, unless --retry-failed)");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
+  add_batch_safety_options(batch_cmd, batch);
   add_run_options(batch_cmd, batch_run, nullptr);
   add_metric_options(batch_cmd, all_metrics(), batch_options);
   add_shard_option(batch_cmd, batch.shard);
@@ -292,7 +299,9 @@ int run(int argc, char** argv) {
       batch.report_dir = batch_report.file;
       batch.report = report_settings(batch_report);
     }
-    return run_batch(batch);
+    batch.program = argv[0];
+    batch.command_line.assign(argv + 1, argv + argc);
+    return batch_worker ? run_batch_worker(batch) : run_batch(batch);
   }
   ScoreRequest demo;
   demo.run.threads = global.threads;

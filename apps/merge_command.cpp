@@ -33,6 +33,9 @@ bool same_file(const fs::path& a, const fs::path& b) {
 
 int run_merge(const MergeCommand& c, bool quiet) {
   const fs::path list(c.list);
+  if (same_file(list, c.output)) {
+    throw InputError(c.output + ": is the list itself (--list and -o name the same file)");
+  }
   std::vector<ResultKey> expected;
   for (const ListPair& pair : parse_pair_list(read_file_bytes(list), list.string())) {
     for (const std::string& metric : batch_metrics(pair, list)) {
@@ -41,6 +44,7 @@ int run_merge(const MergeCommand& c, bool quiet) {
   }
   std::vector<ResultFile> files;
   std::set<std::string> seen;
+  std::vector<std::string> missing_files;  // with --partial, shards that left no results
   for (const std::string& input : c.inputs) {
     if (same_file(input, c.output)) {
       throw InputError(input + ": is both an input and the output (-o)");
@@ -48,8 +52,14 @@ int run_merge(const MergeCommand& c, bool quiet) {
     if (!seen.insert(fs::weakly_canonical(input).string()).second) {
       throw InputError(input + ": given twice");
     }
+    if (c.partial && !fs::exists(input)) {
+      missing_files.push_back(input + ": no such file (a shard that did not run?)");
+      continue;
+    }
     files.push_back({input, read_file_bytes(input)});
   }
+  print_list("merge: missing shard results: ", missing_files);
+  if (files.empty()) throw InputError("none of the shard results exists; nothing written");
   const MergeResult m = merge_results(expected, files);
 
   if (!quiet) {
@@ -81,7 +91,7 @@ int run_merge(const MergeCommand& c, bool quiet) {
               << m.rows.size() - m.failed.size() << " ok, " << m.failed.size() << " failed, "
               << m.missing.size() << " missing) written to " << c.output << "\n";
   }
-  return m.failed.empty() && m.missing.empty() ? 0 : 2;
+  return m.failed.empty() && m.missing.empty() && missing_files.empty() ? 0 : 2;
 }
 
 }  // namespace
@@ -93,7 +103,9 @@ std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
       "merge",
       "Join the results of `qm3d batch LIST --shard K/N` runs into the rows one `qm3d batch "
       "LIST` would have written, in LIST's order. Missing, duplicated, conflicting and failed "
-      "pairs are reported on stderr; exit code 2 when a pair is missing, conflicts or failed");
+      "pairs are reported on stderr (a row whose status is ok but whose score is not a finite "
+      "number is written as an error row); rows scored with other settings are refused; exit "
+      "code 2 when a pair is missing, conflicts or failed");
   add_common(c->merge);
   c->merge->add_option("SHARD_RESULTS", c->inputs, "Results CSVs of the shards (e.g. out/OUT_*.csv)")
       ->required();
@@ -105,7 +117,8 @@ std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
       ->required()
       ->type_name("LIST.csv");
   c->merge->add_flag("--partial", c->partial,
-                     "Write the rows found even when some are missing (exit code still 2)");
+                     "Write the rows found even when some rows or whole shard results are missing "
+                     "(each is named on stderr; exit code still 2)");
   return c;
 }
 

@@ -1,8 +1,12 @@
 #include "shard.h"
 
+#include <cctype>
+#include <charconv>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -40,6 +44,98 @@ struct Row {
 };
 
 std::string where(const Row& r) { return r.file + ":" + std::to_string(r.line_no); }
+
+constexpr const char* kUtf8Bom = "\xEF\xBB\xBF";
+
+// Where a list's columns are: by position (reference,distorted[,metric]) unless a header names
+// them in another order.
+struct ListColumns {
+  std::size_t reference = 0, distorted = 1;
+  std::size_t metric = 2;  ///< kNoColumn when the header has none
+  std::size_t count = 3;   ///< most fields a row may have
+};
+constexpr std::size_t kNoColumn = std::numeric_limits<std::size_t>::max();
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// A first line naming any of the list's columns is a header (a path is never just "metric").
+bool is_list_header(const std::vector<std::string>& fields) {
+  for (const std::string& f : fields) {
+    const std::string l = lower(f);
+    if (l == "reference" || l == "distorted" || l == "metric") return true;
+  }
+  return false;
+}
+
+ListColumns list_columns(const std::vector<std::string>& fields, const std::string& name,
+                         std::size_t line_no) {
+  const std::string at = name + ": line " + std::to_string(line_no) + ": ";
+  ListColumns c{kNoColumn, kNoColumn, kNoColumn, fields.size()};
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const std::string l = lower(fields[i]);
+    std::size_t* slot = l == "reference"   ? &c.reference
+                        : l == "distorted" ? &c.distorted
+                        : l == "metric"    ? &c.metric
+                                           : nullptr;
+    if (slot == nullptr) {
+      throw FormatError(at + "unknown column \"" + fields[i] +
+                        "\" in the header (a list's columns are reference, distorted and "
+                        "optionally metric, in any order)");
+    }
+    if (*slot != kNoColumn) throw FormatError(at + "column \"" + fields[i] + "\" appears twice");
+    *slot = i;
+  }
+  if (c.reference == kNoColumn || c.distorted == kNoColumn) {
+    throw FormatError(at + "the header names no " +
+                      std::string(c.reference == kNoColumn ? "reference" : "distorted") +
+                      " column");
+  }
+  return c;
+}
+
+ListPair list_pair(const std::vector<std::string>& f, const ListColumns& c, const std::string& name,
+                   std::size_t line_no) {
+  const auto field = [&](std::size_t i) { return i < f.size() ? f[i] : std::string(); };
+  ListPair p{field(c.reference), field(c.distorted), field(c.metric)};
+  if (f.size() > c.count || p.reference.empty() || p.distorted.empty()) {
+    throw FormatError(name + ": line " + std::to_string(line_no) + ": expected " +
+                      (c.count == 3 && c.reference == 0 && c.distorted == 1
+                           ? std::string("reference,distorted[,metric]")
+                           : std::to_string(c.count) + " fields as in the header"));
+  }
+  if (p.metric.empty()) p.metric = "auto";
+  return p;
+}
+
+// The rows of a merge come from one configuration: a row scored with other settings (shards
+// run with different options) would mix scores that cannot be compared.
+void check_same_settings(const Row& row, std::optional<Row>& first, std::size_t column) {
+  if (!first) {
+    first = row;
+    return;
+  }
+  if (row.fields[column] != first->fields[column]) {
+    throw FormatError(where(row) + ": scored with settings \"" + row.fields[column] + "\", " +
+                      where(*first) + " with \"" + first->fields[column] +
+                      "\" (shards run with different options?); nothing merged");
+  }
+}
+
+bool is_finite_number(const std::string& s) {
+  double value = 0;
+  const char* end = s.data() + s.size();
+  const auto [ptr, ec] = std::from_chars(s.data(), end, value);
+  return !s.empty() && ec == std::errc() && ptr == end && std::isfinite(value);
+}
+
+std::string csv_line(const std::vector<std::string>& fields) {
+  std::string line;
+  for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
+  return line;
+}
 
 }  // namespace
 
@@ -102,22 +198,22 @@ std::uintmax_t input_bytes(const std::filesystem::path& path) noexcept {
 }
 
 std::vector<ListPair> parse_pair_list(const std::string& text, const std::string& name) {
-  std::istringstream in(text);
+  std::istringstream in(text.rfind(kUtf8Bom, 0) == 0 ? text.substr(3) : text);
   std::vector<ListPair> pairs;
+  std::optional<ListColumns> header;
   std::string line;
   for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     auto f = csv_split(line);
     for (auto& s : f) {
-      s.erase(0, s.find_first_not_of(" \t"));
-      s.erase(s.find_last_not_of(" \t") + 1);
+      s.erase(0, s.find_first_not_of(" \t\r"));
+      s.erase(s.find_last_not_of(" \t\r") + 1);
     }
-    if (pairs.empty() && f[0] == "reference") continue;  // header
-    if (f.size() < 2 || f.size() > 3 || f[0].empty() || f[1].empty()) {
-      throw FormatError(name + ": line " + std::to_string(line_no) +
-                        ": expected reference,distorted[,metric]");
+    if (pairs.empty() && !header && is_list_header(f)) {
+      header = list_columns(f, name, line_no);
+      continue;
     }
-    pairs.push_back({f[0], f[1], f.size() == 3 && !f[2].empty() ? f[2] : "auto"});
+    pairs.push_back(list_pair(f, header.value_or(ListColumns{}), name, line_no));
   }
   if (pairs.empty()) throw FormatError(name + ": no pairs");
   return pairs;
@@ -144,7 +240,9 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
   std::map<ResultKey, std::vector<Row>> rows;
   std::vector<std::string> header_fields;
   std::string header_file;
-  std::size_t seconds_column = 0, status_column = 0, error_column = 0;
+  std::size_t seconds_column = 0, status_column = 0, error_column = 0, score_column = 0;
+  std::size_t settings_column = kNoColumn;
+  std::optional<Row> first_settings;  // the first row, whose settings every row must share
   for (const ResultFile& file : files) {
     std::istringstream in(file.text);
     std::string line;
@@ -171,6 +269,9 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
           seconds_column = column_of(fields, "seconds", file.name);
           status_column = column_of(fields, "status", file.name);
           error_column = column_of(fields, "error", file.name);
+          score_column = column_of(fields, "score", file.name);
+          const auto settings = std::find(fields.begin(), fields.end(), "settings");
+          if (settings != fields.end()) settings_column = settings - fields.begin();
           header_fields = fields;
           header_file = file.name;
           result.header = line;
@@ -187,7 +288,9 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
       }
       ++result.rows_read;
       ResultKey key{fields[0], fields[1], fields[2]};
-      rows[key].push_back(Row{line, std::move(fields), file.name, line_no});
+      Row row{line, std::move(fields), file.name, line_no};
+      if (settings_column != kNoColumn) check_same_settings(row, first_settings, settings_column);
+      rows[key].push_back(std::move(row));
     }
     if (!have_header) throw FormatError(file.name + ": empty (no header line)");
   }
@@ -223,9 +326,18 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
       result.duplicates.push_back(describe(key) + ": " + std::to_string(found.size()) +
                                   " identical rows (" + places + "), one kept");
     }
-    result.rows.push_back(found[0].line);
-    if (found[0].fields[status_column] != "ok") {
-      result.failed.push_back(describe(key) + ": " + found[0].fields[error_column]);
+    Row kept = found[0];
+    if (kept.fields[status_column] == "ok" && !is_finite_number(kept.fields[score_column])) {
+      // A row that says ok without a score is not a result: kept as the error it is.
+      kept.fields[status_column] = "error";
+      kept.fields[error_column] = "merge: status ok but the score \"" + kept.fields[score_column] +
+                                  "\" is not a finite number (" + where(kept) + ")";
+      kept.fields[score_column].clear();
+      kept.line = csv_line(kept.fields);
+    }
+    result.rows.push_back(kept.line);
+    if (kept.fields[status_column] != "ok") {
+      result.failed.push_back(describe(key) + ": " + kept.fields[error_column]);
     }
   }
   for (const auto& [key, found] : rows) {

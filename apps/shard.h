@@ -52,9 +52,11 @@ struct ListPair {
   std::string reference, distorted, metric;
 };
 
-/// The pairs of a batch list (the format `qm3d batch` reads: reference,distorted[,metric], an
-/// optional header, blank lines and '#' comments skipped, fields trimmed). `name` names the file
-/// in errors. Throws FormatError for a malformed line or a list without pairs.
+/// The pairs of a batch list (the format `qm3d batch` reads: reference,distorted[,metric], blank
+/// lines and '#' comments skipped, fields trimmed, a UTF-8 BOM ignored). A first line naming any
+/// of the columns reference, distorted, metric (any case) is a header, and the rows are read by
+/// its names, in its order. `name` names the file in errors. Throws FormatError for a malformed
+/// line, a header with another column name or a repeated one, or a list without pairs.
 std::vector<ListPair> parse_pair_list(const std::string& text, const std::string& name);
 
 /// What identifies a result row: its first three columns.
@@ -85,9 +87,11 @@ struct MergeResult {
 
 /// Joins result files into the rows of `expected` (the keys a single batch over the whole list
 /// writes, in its order; a key listed k times may have k identical rows without a warning).
-/// Rows of one key are the same when every column but `seconds` is equal. Throws FormatError
-/// naming the file for a file without header, headers that differ, or a row whose number of
-/// columns differs from its header's.
+/// Rows of one key are the same when every column but `seconds` is equal. A kept row whose
+/// status is ok but whose score is not a finite number becomes an error row saying so (and is
+/// listed in `failed`). Throws FormatError naming the file for a file without header, headers
+/// that differ, a row whose number of columns differs from its header's, or rows whose
+/// `settings` column (batch_results.h) differs.
 MergeResult merge_results(const std::vector<ResultKey>& expected,
                           const std::vector<ResultFile>& files);
 

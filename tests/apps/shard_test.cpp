@@ -147,6 +147,30 @@ TEST(PairList, ReadsLikeBatch) {
   }
 }
 
+TEST(PairList, HeaderNamesTheColumnsAndABomIsIgnored) {
+  const auto pairs = parse_pair_list(
+      "\xEF\xBB\xBF"
+      "Distorted,metric,reference\nb.ply,pcqm,a.ply\n",
+      "list.csv");
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].reference, "a.ply");
+  EXPECT_EQ(pairs[0].distorted, "b.ply");
+  EXPECT_EQ(pairs[0].metric, "pcqm");
+  const auto no_metric = parse_pair_list("distorted,reference\nb.ply,a.ply\n", "list.csv");
+  EXPECT_EQ(no_metric[0].reference, "a.ply");
+  EXPECT_EQ(no_metric[0].metric, "auto");
+  try {
+    parse_pair_list("reference,distorted,weight\na,b,1\n", "list.csv");
+    FAIL();
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("list.csv: line 1: unknown column \"weight\""),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(parse_pair_list("reference,reference\na,b\n", "list.csv"), FormatError);
+  EXPECT_THROW(parse_pair_list("metric,distorted\ncmdm,b\n", "list.csv"), FormatError);
+}
+
 // ---- merge -------------------------------------------------------------------------------
 
 const char* const kHeader = "reference,distorted,metric,score,status,error,seconds,f1";
@@ -265,6 +289,29 @@ TEST(Merge, RejectsFilesThatAreNotBatchResults) {
   } catch (const FormatError& e) {
     EXPECT_STREQ(e.what(), "OUT_0.csv: line 2: 5 columns, the header has 8");
   }
+}
+
+TEST(Merge, ANonNumberScoreWithStatusOkIsAnErrorRow) {
+  const MergeResult m =
+      merge_results(keys({{"a", "cmdm"}, {"b", "cmdm"}}),
+                    {file("OUT_0.csv", {row("a", "cmdm", "garbage"), row("b", "cmdm", "")})});
+  ASSERT_EQ(m.rows.size(), 2u);
+  ASSERT_EQ(m.failed.size(), 2u);
+  EXPECT_EQ(m.rows[0],
+            "a,d.ply,cmdm,,error,\"merge: status ok but the score \"\"garbage\"\" is not a finite "
+            "number (OUT_0.csv:2)\",1.5,0.25");
+}
+
+TEST(Merge, RowsScoredWithOtherSettingsAreRefused) {
+  const auto with_settings = [](const std::string& name, const std::string& settings) {
+    return ResultFile{name, std::string(kHeader) + ",settings\n" + row("a", "cmdm", "0.5") + "," +
+                                settings + "\n"};
+  };
+  EXPECT_NO_THROW(merge_results(keys({{"a", "cmdm"}}), {with_settings("OUT_0.csv", "defaults"),
+                                                        with_settings("OUT_1.csv", "defaults")}));
+  EXPECT_THROW(merge_results(keys({{"a", "cmdm"}}), {with_settings("OUT_0.csv", "defaults"),
+                                                     with_settings("OUT_1.csv", "radius=0.01")}),
+               FormatError);
 }
 
 }  // namespace
