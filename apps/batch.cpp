@@ -465,7 +465,8 @@ std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesyst
 }
 
 int run_batch(const BatchOptions& o) {
-  std::vector<ListPair> pairs = parse_pair_list(read_file_bytes(o.list), o.list.string());
+  std::vector<ListPair> pairs =
+      parse_pair_list(read_file_bytes(o.list, kMaxTableBytes), o.list.string());
   if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
     return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
   });

@@ -37,7 +37,8 @@ int run_merge(const MergeCommand& c, bool quiet) {
     throw InputError(c.output + ": is the list itself (--list and -o name the same file)");
   }
   std::vector<ResultKey> expected;
-  for (const ListPair& pair : parse_pair_list(read_file_bytes(list), list.string())) {
+  for (const ListPair& pair :
+       parse_pair_list(read_file_bytes(list, kMaxTableBytes), list.string())) {
     for (const std::string& metric : batch_metrics(pair, list)) {
       expected.push_back({pair.reference, pair.distorted, metric});
     }
@@ -56,7 +57,7 @@ int run_merge(const MergeCommand& c, bool quiet) {
       missing_files.push_back(input + ": no such file (a shard that did not run?)");
       continue;
     }
-    files.push_back({input, read_file_bytes(input)});
+    files.push_back({input, read_file_bytes(input, kMaxTableBytes)});
   }
   print_list("merge: missing shard results: ", missing_files);
   if (files.empty()) throw InputError("none of the shard results exists; nothing written");
