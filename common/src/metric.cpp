@@ -186,11 +186,15 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return text;
 }
 
-// Runs a reader of a spooled pipe; its errors name the pipe, not the in-memory copy.
+// Runs a reader of a spooled pipe; its errors and warnings name the pipe, not the in-memory copy.
 template <class Read>
 auto read_renamed(const std::filesystem::path& read_path, const std::string& name, Read read) {
   try {
-    return read();
+    auto data = read();
+    if (read_path.string() != name) {
+      for (std::string& w : data.warnings) w = replaced(w, read_path.string(), name);
+    }
+    return data;
   } catch (const InputError& e) {
     throw InputError(replaced(e.what(), read_path.string(), name));
   } catch (const FormatError& e) {

@@ -249,6 +249,19 @@ TEST_F(HostileIo, APipeIsReadAsAFile) {
   EXPECT_EQ(slurp(dir_ / "io" / "err"), "");
 }
 
+TEST_F(HostileIo, WarningsOfAPipeNameThePipeNotItsInMemoryCopy) {
+  // One colour value just above 1 makes the reader warn (the scale is decided on one value).
+  file("t.off", "COFF\n3 1 0\n0 0 0 1.0000001 0 0 1\n1 0 0 0 1 0 1\n0 1 0 0 0 1 1\n3 0 1 2\n");
+  ASSERT_EQ(::mkfifo((dir_ / "tfifo").c_str(), 0600), 0);
+  shell(
+      "/usr/bin/timeout 60 \"$QM3D\" msdm2 t.off tfifo > io/out 2> io/err & "
+      "/usr/bin/timeout 60 cat t.off > tfifo; wait $!; echo $? > io/rc");
+  EXPECT_EQ(slurp(dir_ / "io" / "rc"), "0\n") << slurp(dir_ / "io" / "err");
+  const std::string err = slurp(dir_ / "io" / "err");
+  EXPECT_NE(err.find("tfifo: 1 of 9 colour values above 1"), std::string::npos) << err;
+  EXPECT_EQ(err.find("/proc/self/fd"), std::string::npos) << err;
+}
+
 // ---- eval --bootstrap ------------------------------------------------------------------------
 
 TEST_F(HostileIo, BootstrapCountIsBounded) {
