@@ -88,7 +88,7 @@ ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std:
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
-    const Input r = registry().read(ref), d = registry().read(dist);
+    const Input r = registry().read(ref, o.request.read), d = registry().read(dist, o.request.read);
     const auto specs = metrics_for(metric, r, d);
     ScoreRequest request = o.request;
     request.release_inputs = o.report_dir.empty();  // a report reads both inputs

@@ -113,6 +113,9 @@ std::string batch_settings(const ScoreRequest& request) {
     items.push_back(name + "=" + (value.is_string() ? value.get<std::string>() : value.dump()));
   }
   if (request.run.direction) items.push_back("direction=" + direction_name(*request.run.direction));
+  if (request.read.colour_scale != ColourScale::kAuto) {
+    items.push_back(std::string("colour-scale=") + colour_scale_name(request.read.colour_scale));
+  }
   if (request.model) {
     std::string weights;
     for (const double w : request.model->weights) {

@@ -31,6 +31,8 @@ struct ScoreRequest {
   /// as soon as the metric holds its own copies (lower peak memory). Ignored when a map is
   /// written (it needs the iterated input's geometry).
   bool release_inputs = false;
+  /// How the input files are read (--colour-scale).
+  ReadOptions read;
 };
 
 /// The metrics a command or a batch row names for the pair: a metric's name, "auto" (the first

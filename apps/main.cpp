@@ -248,6 +248,8 @@ int run(int argc, char** argv) {
       "too, unless --retry-failed)");
   batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
   add_batch_safety_options(batch_cmd, batch);
+  std::string batch_colour_scale = "auto";
+  add_read_options(batch_cmd, batch_colour_scale);
   add_run_options(batch_cmd, batch_run, nullptr);
   add_metric_options(batch_cmd, all_metrics(), batch_options);
   add_shard_option(batch_cmd, batch.shard);
@@ -295,6 +297,7 @@ int run(int argc, char** argv) {
     batch.quiet = global.quiet;
     batch.request = score_request(batch_run, nullptr, global.threads, global.data_dir);
     batch.request.options = metric_option_values(all_metrics(), batch_options);
+    batch.request.read = read_options(batch_colour_scale);
     if (!batch_report.file.empty()) {
       batch.report_dir = batch_report.file;
       batch.report = report_settings(batch_report);

@@ -213,6 +213,30 @@ TEST_F(BatchHostile, ResumeWithOtherSettingsIsRefusedNamingWhatDiffers) {
   EXPECT_EQ(slurp(results_), before);
 }
 
+TEST_F(BatchHostile, ColourScaleReachesTheWorkersAndIsASetting) {
+  // a.off has one colour value of 1.0000001 where b.off has 1: `auto` reads a.off as 0..255
+  // (the reference's rule: nearly black), `unit` as 0..1 (clamped: the pair is identical).
+  const std::string coff =
+      "COFF\n4 2 0\n0 0 0 1 0.5 0.5 1\n1 0 0 0.2 0.4 0.6 1\n"
+      "0 1 0 0.9 0.1 0.3 1\n1 1 0 0.3 0.3 0.3 1\n3 0 1 2\n3 1 3 2\n";
+  std::string above = coff;
+  above.replace(above.find("0 0 0 1 "), 8, "0 0 0 1.0000001 ");
+  std::ofstream(dir_ / "a.off") << above;
+  std::ofstream(dir_ / "b.off") << coff;
+  std::ofstream(list_) << "reference,distorted,metric\nb.off,a.off,pcqm\n";
+  const auto score = [&] {
+    return csv_split(slurp(results_).substr(slurp(results_).find('\n') + 1))[3];
+  };
+  ASSERT_EQ(qm3d(batch("--colour-scale unit")).code, 0) << slurp(results_);
+  EXPECT_EQ(score(), "0");
+  EXPECT_NE(slurp(results_).find("colour-scale=unit"), std::string::npos) << slurp(results_);
+  const CliRun r = qm3d(batch("--resume"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("colour-scale"), std::string::npos) << r.err;
+  ASSERT_EQ(qm3d(batch("--overwrite")).code, 0) << slurp(results_);
+  EXPECT_GT(std::stod(score()), 0.01);
+}
+
 TEST_F(BatchHostile, ResumeExitsNonZeroWhileErrorRowsRemain) {
   write_list({"blob4_colnoise.off"});
   std::ofstream(list_, std::ios::app) << mesh("blob4_ref.off") << ",missing.off,cmdm\n";
