@@ -153,8 +153,17 @@ class PairReports {
   // Writes the index of every row of `results` (this run's and earlier ones').
   void write_index(const std::filesystem::path& results) {
     if (o_.report_dir.empty()) return;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(results, ec)) {
+      // A pipe or device (-o /dev/stdout): reading it back would take another reader's rows.
+      std::lock_guard<std::mutex> lock(mutex_);
+      errors_.push_back(results.string() +
+                        ": not a regular file, so no index.html of its rows is written (the "
+                        "pairs' reports are)");
+      return;
+    }
     std::vector<IndexRow> rows;
-    std::istringstream in(read_file_bytes(results));
+    std::istringstream in(read_file_bytes(results, kMaxTableBytes));
     std::string line;
     while (std::getline(in, line)) {
       const auto f = csv_split(line);
@@ -255,16 +264,12 @@ std::string job_line(const PairJob& job, int threads) {
   return line;
 }
 
-// A worker ended by SIGINT, SIGTERM, SIGHUP or SIGQUIT was stopped with its batch (Ctrl-C
-// reaches the whole process group, scancel every process of the job), not by its pair: no row
-// is written for it (--resume scores it again) and the batch ends by the same signal.
-void stop_if_stopped_from_outside(const JobOutcome& w) {
-  if (w.finished || w.timed_out || !WIFSIGNALED(w.wait_status)) return;
-  const int sig = WTERMSIG(w.wait_status);
-  if (sig != SIGINT && sig != SIGTERM && sig != SIGHUP && sig != SIGQUIT) return;
-  std::signal(sig, SIG_DFL);
-  std::raise(sig);
-}
+// Ctrl-C reaches the whole process group and scancel every process of the job: the batch
+// itself then ends by the signal's default action (it installs no handler for SIGINT, SIGTERM,
+// SIGHUP or SIGQUIT) before it sees its workers end, so no row is written for the pairs in
+// flight and --resume scores them. A worker that such a signal ended while its batch lives was
+// stopped alone (an out-of-memory daemon such as earlyoom sends SIGTERM to the largest process,
+// or someone killed it): that is its pair's error row, like a crash, and the batch goes on.
 
 // Scores a job in a worker process: each row it writes, as it arrives, and for each row it did
 // not write (it crashed, aborted, ran out of memory or time) an error row saying how it ended.
@@ -281,7 +286,6 @@ bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, con
     }
   };
   const JobOutcome w = worker.run(job_line(job, threads), o.pair_timeout_s, take_row);
-  stop_if_stopped_from_outside(w);
   for (const std::string& metric : job.metrics) {
     if (written.count(metric) > 0) continue;
     done(csv_error_row(job.pair.reference, job.pair.distorted, metric,
@@ -293,8 +297,9 @@ bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, con
 
 // Test hook, for tests/apps/batch_hostile_test.cpp only: QM3D_TEST_FAULT=KIND:NAME makes a
 // worker fail as a crashing metric would on a pair whose distorted file is named NAME: KIND
-// segv (SIGSEGV), abort (SIGABRT) or hang (never returns), so that the tests need no input that
-// crashes a metric (such inputs get fixed).
+// segv (SIGSEGV), abort (SIGABRT), term (SIGTERM, as an out-of-memory daemon sends) or hang
+// (never returns), so that the tests need no input that crashes a metric (such inputs get
+// fixed).
 void test_fault(const ListPair& pair) {
   const char* fault = std::getenv("QM3D_TEST_FAULT");
   if (fault == nullptr) return;
@@ -309,6 +314,10 @@ void test_fault(const ListPair& pair) {
   if (kind == "segv") {
     std::signal(SIGSEGV, SIG_DFL);
     std::raise(SIGSEGV);
+  }
+  if (kind == "term") {
+    std::signal(SIGTERM, SIG_DFL);
+    std::raise(SIGTERM);
   }
   if (kind == "abort") {
     std::signal(SIGABRT, SIG_DFL);

@@ -141,7 +141,9 @@ JobOutcome WorkerProcess::run(const std::string& job, double timeout_s,
       break;
     }
     pollfd p{from_worker_, POLLIN, 0};
-    if (::poll(&p, 1, wait_ms(limited, deadline)) <= 0) continue;  // EINTR or the deadline
+    const int ready = ::poll(&p, 1, wait_ms(limited, deadline));
+    if (ready < 0 && errno != EINTR) break;  // cannot wait on the worker: treat it as gone
+    if (ready <= 0) continue;                // EINTR or the deadline
     const ssize_t n = ::read(from_worker_, chunk, sizeof chunk);
     if (n > 0) {
       buffer_.append(chunk, static_cast<std::size_t>(n));
@@ -165,6 +167,9 @@ std::string describe_worker_end(const JobOutcome& w, double timeout_s) {
                       (abbrev ? std::string(" (SIG") + abbrev + ")" : std::string());
     // The kernel's out-of-memory killer sends SIGKILL.
     if (sig == SIGKILL) why += "; killed from outside, e.g. for lack of memory";
+    if (sig == SIGTERM || sig == SIGINT || sig == SIGHUP || sig == SIGQUIT) {
+      why += "; stopped from outside (not its batch), e.g. by an out-of-memory daemon";
+    }
     return why;
   }
   if (WIFEXITED(w.wait_status) && WEXITSTATUS(w.wait_status) != 0) {

@@ -278,7 +278,7 @@ struct TempFile {
 };
 
 TempFile try_create_temp_beside(const fs::path& target) {
-  static std::mt19937_64 rng{std::random_device{}() ^
+  thread_local std::mt19937_64 rng{std::random_device{}() ^
                              (static_cast<std::uint64_t>(::getpid()) << 32)};
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
   constexpr int kAttempts = 16;

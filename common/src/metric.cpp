@@ -564,10 +564,8 @@ const std::vector<Vec3>& positions_of(const Input& in, Input::Kind as) {
   return as == Input::Kind::kMesh ? in.mesh().mesh.positions : in.cloud().positions;
 }
 
-// Where a direction's score or pooled features are not finite: "score nan", "f3 inf"; empty
-// when all are.
-std::string non_finite_value(const DirectionResult& d, const std::vector<std::string>& names) {
-  if (!std::isfinite(d.score)) return "score " + short_number(d.score);
+// The first non-finite pooled feature of a direction, as "f3 nan"; empty when all are finite.
+std::string non_finite_feature(const DirectionResult& d, const std::vector<std::string>& names) {
   for (std::size_t k = 0; k < d.features.size(); ++k) {
     if (std::isfinite(d.features[k])) continue;
     const std::string feature = k < names.size() ? names[k] : "feature " + std::to_string(k + 1);
@@ -577,15 +575,24 @@ std::string non_finite_value(const DirectionResult& d, const std::vector<std::st
 }
 
 // A metric never reports a non-finite score as a result: NumericError naming the metric, the
-// direction and the value.
-void check_finite_result(const MetricSpec& spec, const MetricResult& r) {
+// direction, the value and the first non-finite feature. A non-finite feature the score does not
+// use (weight 0: the pooling skips it, as the reference tools do) is a warning, not an error, so
+// that such scores stay the reference's.
+void check_finite_result(const MetricSpec& spec, MetricResult& r) {
   const auto check = [&](const std::optional<DirectionResult>& d, Direction which) {
     if (!d) return;
-    const std::string bad = non_finite_value(*d, r.feature_names);
-    if (bad.empty()) return;
-    throw NumericError(spec.title + ": the " + direction_name(which) + " " + bad +
-                       " is not finite (degenerate data or options: e.g. a radius so small that "
-                       "no neighbour is within it)");
+    const std::string feature = non_finite_feature(*d, r.feature_names);
+    if (!std::isfinite(d->score)) {
+      throw NumericError(spec.title + ": the " + direction_name(which) + " score " +
+                         short_number(d->score) + " is not finite" +
+                         (feature.empty() ? "" : " (" + feature + ")") +
+                         " (degenerate data or options: e.g. a radius so small that no "
+                         "neighbour is within it)");
+    }
+    if (!feature.empty()) {
+      r.warnings.push_back(spec.title + ": the " + direction_name(which) + " feature " + feature +
+                           " is not finite; the score does not use it (weight 0)");
+    }
   };
   check(r.dist_to_ref, Direction::kDistToRef);
   check(r.ref_to_dist, Direction::kRefToDist);

@@ -75,18 +75,27 @@ template <typename Result>
 Result call_interruptibly(std::function<Result(const std::atomic<bool>& cancelled)> body) {
   auto state = std::make_shared<CallState<Result>>();
   AbandonedWorkers::instance().started();
-  std::thread([state, body = std::move(body)] {
-    try {
-      Result r = body(state->cancelled);
-      std::lock_guard<std::mutex> lock(state->mutex);
-      state->result.emplace(std::move(r));
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(state->mutex);
-      state->error = std::current_exception();
+  std::thread([state, body = std::move(body)]() mutable {
+    {
+      // Everything the call holds (the user's callback among it) is destroyed in this scope,
+      // before finished(): once the last worker has finished, the interpreter may shut down.
+      auto call = std::move(body);
+      try {
+        Result r = call(state->cancelled);
+        std::lock_guard<std::mutex> lock(state->mutex);
+        state->result.emplace(std::move(r));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(state->mutex);
+        state->error = std::current_exception();
+      }
     }
     {
       std::lock_guard<std::mutex> lock(state->mutex);
       state->done = true;
+      if (state->cancelled) {  // the caller has gone: nothing it would have read outlives us
+        state->error = nullptr;
+        state->result.reset();
+      }
     }
     state->finished.notify_all();
     AbandonedWorkers::instance().finished();
@@ -98,7 +107,12 @@ Result call_interruptibly(std::function<Result(const std::atomic<bool>& cancelle
       if (state->finished.wait_for(lock, kSignalPollInterval, [&] { return state->done; })) break;
     }
     if (PyErr_CheckSignals() != 0) {
+      std::lock_guard<std::mutex> lock(state->mutex);
       state->cancelled = true;
+      if (state->done) {  // finished meanwhile: its outcome is dropped here, with the GIL
+        state->error = nullptr;
+        state->result.reset();
+      }
       throw pybind11::error_already_set();
     }
   }

@@ -280,8 +280,9 @@ TEST(RunMetric, RefusesCoordinatesWhoseSquaresOverflowOrUnderflow) {
   EXPECT_NO_THROW(run_metric(s, good, small, run));
 }
 
-// A metric that computes NaN never returns it as a score.
-TEST(RunMetric, ANonFiniteScoreOrFeatureIsANumericErrorNamingTheMetric) {
+// A metric that computes NaN never returns it as a score; a non-finite feature its score does
+// not use is a warning (the reference's pooling skips zero-weight features).
+TEST(RunMetric, ANonFiniteScoreIsANumericErrorNamingTheMetricAndAnUnusedFeatureAWarning) {
   MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
   s.title = "TOY";
   const Input a = Input::from_cloud(cloud_of({0, 1}), "a.ply");
@@ -289,12 +290,14 @@ TEST(RunMetric, ANonFiniteScoreOrFeatureIsANumericErrorNamingTheMetric) {
   s.run = [](const MetricSpec&, const Input&, const Input&, const RunOptions&,
              const OptionValues&) {
     MetricResult r;
-    r.ref_to_dist = DirectionResult{std::nan(""), {}, 1, {}};
+    r.feature_names = {"f1", "f2", "f3", "f4", "f5", "f6", "f7", "f8"};
+    r.ref_to_dist = DirectionResult{std::nan(""), {0, 0, NAN, 0, 0, 0, 0, 0}, 1, {}};
     combine_directions(r);
     return r;
   };
-  std::string e = error_of([&] { run_metric(s, a, a, run); });
-  EXPECT_EQ(e.rfind("TOY: the ref-to-dist score nan is not finite", 0), 0u) << e;
+  const std::string e = error_of([&] { run_metric(s, a, a, run); });
+  EXPECT_EQ(e.rfind("TOY: the ref-to-dist score nan is not finite (f3 nan)", 0), 0u) << e;
+  EXPECT_NE(e.find("(reference a.ply, distorted a.ply)"), std::string::npos) << e;
   s.run = [](const MetricSpec&, const Input&, const Input&, const RunOptions&,
              const OptionValues&) {
     MetricResult r;
@@ -303,9 +306,11 @@ TEST(RunMetric, ANonFiniteScoreOrFeatureIsANumericErrorNamingTheMetric) {
     combine_directions(r);
     return r;
   };
-  e = error_of([&] { run_metric(s, a, a, run); });
-  EXPECT_EQ(e.rfind("TOY: the dist-to-ref f3 inf is not finite", 0), 0u) << e;
-  EXPECT_NE(e.find("(reference a.ply, distorted a.ply)"), std::string::npos) << e;
+  const MetricResult r = run_metric(s, a, a, run);
+  EXPECT_EQ(r.score, 0.5);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_EQ(r.warnings[0].rfind("TOY: the dist-to-ref feature f3 inf is not finite", 0), 0u)
+      << r.warnings[0];
 }
 
 TEST(OptionsFor, KeepsTheNamesTheMetricKnows) {
