@@ -18,6 +18,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/ply.h"
+#include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 
 namespace qm3d {
@@ -504,17 +505,6 @@ void check_thread_count(int threads) {
                                 std::to_string(kMinThreadLimit) + "; 0 = all cores)");
   }
 }
-
-namespace {
-
-std::string short_number(double x) {
-  std::ostringstream out;
-  out.imbue(std::locale::classic());
-  out << x;
-  return out.str();
-}
-
-}  // namespace
 
 void check_coordinate_range(const std::vector<Vec3>& positions, const std::string& name) {
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};

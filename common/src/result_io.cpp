@@ -36,13 +36,6 @@ std::string upper(std::string s) {
   return s;
 }
 
-std::string short_number(double v) {
-  std::ostringstream o;
-  o.precision(6);
-  o << v;
-  return o.str();
-}
-
 void append_direction(std::ostringstream& row, const std::optional<DirectionResult>& d) {
   if (!d) {
     row << std::string(2 + kNumFeatures, ',');
@@ -53,6 +46,14 @@ void append_direction(std::ostringstream& row, const std::optional<DirectionResu
 }
 
 }  // namespace
+
+std::string short_number(double v) {
+  std::ostringstream o;
+  o.imbue(std::locale::classic());
+  o.precision(6);
+  o << v;
+  return o.str();
+}
 
 std::string format_double(double v) {
   if (std::isnan(v)) return "nan";

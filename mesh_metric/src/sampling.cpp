@@ -8,6 +8,7 @@
 #include <string>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/result_io.h"
 #include "vec3_ops.h"
 
 namespace qm3d::mesh {
@@ -112,14 +113,6 @@ ColoredCloud build_cloud(const ColoredMesh& mesh, const std::vector<SurfacePoint
     cloud.colors.push_back(color_of(p));
   }
   return cloud;
-}
-
-// %g-style, locale-independent: 1e+19, 3.14159.
-std::string short_number(double x) {
-  std::ostringstream out;
-  out.imbue(std::locale::classic());
-  out << x;
-  return out.str();
 }
 
 }  // namespace

@@ -43,4 +43,8 @@ std::vector<std::string> csv_split(const std::string& line);
 /// Shortest text that reads back as the same double ("nan" for NaN).
 std::string format_double(double v);
 
+/// Six significant digits, %g style, whatever the locale (1e+19, 0.0421026): the human line's
+/// numbers and the values quoted in messages.
+std::string short_number(double v);
+
 }  // namespace qm3d
