@@ -335,11 +335,6 @@ BatchOptions job_options(const BatchOptions& o, int job_threads) {
   return per_job;
 }
 
-bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
-  std::error_code ec;
-  return std::filesystem::equivalent(a, b, ec) && !ec;
-}
-
 // The output must be none of the inputs: not the list (--resume would find no rows, --overwrite
 // would erase it), nor a file of a pair (--overwrite would erase it).
 void refuse_input_as_output(const BatchOptions& o, const std::vector<ListPair>& pairs) {

@@ -25,12 +25,6 @@ void print_list(const std::string& prefix, const std::vector<std::string>& items
   }
 }
 
-bool same_file(const fs::path& a, const fs::path& b) {
-  std::error_code ec;
-  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec) && !ec;
-  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
-}
-
 int run_merge(const MergeCommand& c, bool quiet) {
   const fs::path list(c.list);
   if (same_file(list, c.output)) {

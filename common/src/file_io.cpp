@@ -440,21 +440,23 @@ void write_file_atomically(const fs::path& path, const std::function<void(std::o
   write_regular_atomically(path, target, write);
 }
 
+bool same_file(const fs::path& a, const fs::path& b) {
+  const auto id = identity(a), other = identity(b);
+  return id && other && same(*id, *other);
+}
+
 void check_outputs(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     const NamedPath& o = outputs[i];
     if (o.path.empty()) continue;
-    const auto id = identity(o.path);
     for (const NamedPath& in : inputs) {
-      const auto other = identity(in.path);
-      if (id && other && same(*id, *other)) {
+      if (same_file(in.path, o.path)) {
         throw output_error(
             o, "is the input " + in.option + " " + in.path.string() + " (it would be overwritten)");
       }
     }
     for (std::size_t j = 0; j < i; ++j) {
-      const auto other = identity(outputs[j].path);
-      if (id && other && same(*id, *other)) {
+      if (same_file(outputs[j].path, o.path)) {
         throw output_error(o, "is also the output " + outputs[j].option + " (one would be lost)");
       }
     }

@@ -58,6 +58,11 @@ struct NamedPath {
   std::filesystem::path path;
 };
 
+/// True when writing `b` would replace `a`: the same regular file by identity (hard links and
+/// symlinks included) or the same new path. FIFOs, devices and standard streams are never the
+/// same (writing into them replaces nothing). The rule check_outputs applies.
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
 /// Checks, before any long computation, that each output can be written: its folder exists and
 /// takes new files, it is not a directory, and it is neither one of `inputs` nor another output
 /// (the same file by identity, hard links and symlinks included, or the same new path). Outputs
