@@ -9,18 +9,14 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
+#include "table_text.h"
 
 namespace qm3d::app {
 namespace {
 
-constexpr const char* kUtf8Bom = "\xEF\xBB\xBF";
 /// The stimulus column of `qm3d batch` results.
 constexpr const char* kBatchKeyColumn = "distorted";
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 std::string trimmed(const std::string& s) {
   const auto begin = s.find_first_not_of(" \t");
@@ -84,9 +80,8 @@ std::map<std::string, std::size_t> index_keys(const CsvTable& t, std::size_t col
 CsvTable read_csv_table(const std::filesystem::path& path) {
   CsvTable t;
   t.path = path.string();
-  std::string text = read_file_bytes(path, kMaxTableBytes);
-  if (text.rfind(kUtf8Bom, 0) == 0) text.erase(0, 3);
-  std::istringstream in(text);
+  const std::string bytes = read_file_bytes(path, kMaxTableBytes);
+  std::istringstream in(std::string(without_utf8_bom(bytes)));
   std::string line;
   for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
     if (trimmed(line).empty() || line == "\r") continue;
@@ -131,7 +126,7 @@ std::size_t value_column(const CsvTable& table, const std::string& name,
   if (!name.empty()) return require_column(table, name, option);
   for (const std::string& want : preferred) {
     for (std::size_t c = 0; c < table.header.size(); ++c) {
-      if (lower(table.header[c]) == lower(want)) return c;
+      if (lower_ascii(table.header[c]) == lower_ascii(want)) return c;
     }
   }
   if (table.header.size() == 2) return key == 0 ? 1 : 0;

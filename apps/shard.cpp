@@ -14,6 +14,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/result_io.h"
+#include "table_text.h"
 
 namespace qm3d::app {
 namespace {
@@ -45,7 +46,6 @@ struct Row {
 
 std::string where(const Row& r) { return r.file + ":" + std::to_string(r.line_no); }
 
-constexpr const char* kUtf8Bom = "\xEF\xBB\xBF";
 
 // Where a list's columns are: by position (reference,distorted[,metric]) unless a header names
 // them in another order.
@@ -56,15 +56,11 @@ struct ListColumns {
 };
 constexpr std::size_t kNoColumn = std::numeric_limits<std::size_t>::max();
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 // A first line naming any of the list's columns is a header (a path is never just "metric").
 bool is_list_header(const std::vector<std::string>& fields) {
   for (const std::string& f : fields) {
-    const std::string l = lower(f);
+    const std::string l = lower_ascii(f);
     if (l == "reference" || l == "distorted" || l == "metric") return true;
   }
   return false;
@@ -75,7 +71,7 @@ ListColumns list_columns(const std::vector<std::string>& fields, const std::stri
   const std::string at = name + ": line " + std::to_string(line_no) + ": ";
   ListColumns c{kNoColumn, kNoColumn, kNoColumn, fields.size()};
   for (std::size_t i = 0; i < fields.size(); ++i) {
-    const std::string l = lower(fields[i]);
+    const std::string l = lower_ascii(fields[i]);
     std::size_t* slot = l == "reference"   ? &c.reference
                         : l == "distorted" ? &c.distorted
                         : l == "metric"    ? &c.metric
@@ -198,7 +194,7 @@ std::uintmax_t input_bytes(const std::filesystem::path& path) noexcept {
 }
 
 std::vector<ListPair> parse_pair_list(const std::string& text, const std::string& name) {
-  std::istringstream in(text.rfind(kUtf8Bom, 0) == 0 ? text.substr(3) : text);
+  std::istringstream in(std::string(without_utf8_bom(text)));
   std::vector<ListPair> pairs;
   std::optional<ListColumns> header;
   std::string line;
