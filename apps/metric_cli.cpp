@@ -51,6 +51,12 @@ std::string option_help(const std::vector<const MetricSpec*>& specs, const std::
 
 }  // namespace
 
+std::string cli_flag(const std::string& option) {
+  std::string flag = "--" + option;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
 std::vector<const MetricSpec*> all_metrics() {
   std::vector<const MetricSpec*> all;
   for (const auto& m : registry().metrics()) all.push_back(&m);
@@ -63,7 +69,7 @@ void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& spe
   for (const MetricSpec* spec : specs) {
     for (const OptionSpec& o : spec->options) {
       if (!added.insert(o.name).second) continue;
-      const std::string flag = "--" + o.name;
+      const std::string flag = cli_flag(o.name);
       const std::string help = option_help(specs, o.name);
       const nlohmann::json& d = o.default_value;
       if (d.is_boolean()) {
@@ -101,7 +107,7 @@ OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
       }
       const std::string& text = cli.text.at(o.name);
       const auto bad = [&] {
-        return std::invalid_argument("--" + o.name + ": '" + text + "' is not " +
+        return std::invalid_argument(cli_flag(o.name) + ": '" + text + "' is not " +
                                      (d.is_number_integer() ? "an integer"
                                       : d.is_number()       ? "a number"
                                                             : "a list of numbers"));

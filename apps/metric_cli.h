@@ -29,6 +29,9 @@ struct RunCli {
 
 /// Every registered metric, in registration order.
 std::vector<const MetricSpec*> all_metrics();
+/// The tool's flag of a metric option: "--" + its name with '_' as '-' (color_space ->
+/// --color-space; the Python keyword keeps the name).
+std::string cli_flag(const std::string& option);
 
 /// Adds --NAME for each option of `specs`, once per name (compare and batch take the options of
 /// every metric; a value given applies to each metric that has an option of that name).

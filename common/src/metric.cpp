@@ -276,7 +276,7 @@ Input Input::from_cloud(ColoredCloud cloud, std::string name) {
   in.state_ = std::make_shared<State>();
   in.state_->name = std::move(name);
   in.state_->kind = Kind::kCloud;
-  in.state_->cloud = CloudData{std::move(cloud), {}};
+  in.state_->cloud = CloudData{std::move(cloud), {}, {}};
   return in;
 }
 
@@ -304,7 +304,7 @@ const ColoredCloud& Input::cloud() const {
   std::lock_guard<std::mutex> lock(s.mutex);
   if (s.cloud) return s.cloud->cloud;
   if (s.path.empty()) {  // a mesh in memory: its vertices
-    s.cloud = CloudData{vertex_cloud(s.mesh->mesh), {}};
+    s.cloud = CloudData{vertex_cloud(s.mesh->mesh), {}, {}};
     if (!s.mesh->has_colors) s.cloud->cloud.colors.clear();
     return s.cloud->cloud;
   }
@@ -319,6 +319,12 @@ std::vector<std::string> Input::cloud_warnings() const {
   cloud();
   std::lock_guard<std::mutex> lock(state_->mutex);
   return state_->cloud->warnings;
+}
+
+const std::vector<Vec3>& Input::cloud_normals() const {
+  cloud();
+  std::lock_guard<std::mutex> lock(state_->mutex);
+  return state_->cloud->normals;
 }
 
 void Input::load(Kind as) const {
@@ -339,6 +345,16 @@ void Input::release() const {
 
 // ---------------------------------------------------------------------------------------------
 // Metric specs and the registry
+
+std::vector<std::string> csv_value_names(const std::vector<const MetricSpec*>& specs) {
+  std::vector<std::string> names;
+  for (const MetricSpec* spec : specs) {
+    for (const std::string& n : spec->value_names) {
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+    }
+  }
+  return names;
+}
 
 bool MetricSpec::applies(const Input& reference, const Input& distorted) const {
   switch (applies_to) {
@@ -568,25 +584,41 @@ std::string non_finite_feature(const DirectionResult& d, const std::vector<std::
 // direction, the value and the first non-finite feature. A non-finite feature the score does not
 // use (weight 0: the pooling skips it, as the reference tools do) is a warning, not an error, so
 // that such scores stay the reference's.
+// A quality (higher is better) may be +inf: the PSNR of identical inputs. NaN never passes, in a
+// score or a named value.
+bool acceptable_score(const MetricSpec& spec, double v) {
+  return std::isfinite(v) || (spec.higher_is_better && v == HUGE_VAL);
+}
+
+void check_named_values(const MetricSpec& spec, const NamedValues& values, const std::string& where) {
+  for (const auto& [name, v] : values) {
+    if (std::isnan(v)) {
+      throw NumericError(spec.title + ": " + where + name + " is not a number (degenerate data)");
+    }
+  }
+}
+
 void check_finite_result(const MetricSpec& spec, MetricResult& r) {
+  check_named_values(spec, r.values, "");
   const auto check = [&](const std::optional<DirectionResult>& d, Direction which) {
     if (!d) return;
+    check_named_values(spec, d->values, "the " + direction_name(which) + " value ");
     const std::string feature = non_finite_feature(*d, r.feature_names);
-    if (!std::isfinite(d->score)) {
+    if (!acceptable_score(spec, d->score)) {
       throw NumericError(spec.title + ": the " + direction_name(which) + " score " +
                          short_number(d->score) + " is not finite" +
                          (feature.empty() ? "" : " (" + feature + ")") +
                          " (degenerate data or options: e.g. a radius so small that no "
                          "neighbour is within it)");
     }
-    if (!feature.empty()) {
+    if (!feature.empty() && !r.feature_names.empty()) {
       r.warnings.push_back(spec.title + ": the " + direction_name(which) + " feature " + feature +
                            " is not finite; the score does not use it (weight 0)");
     }
   };
   check(r.dist_to_ref, Direction::kDistToRef);
   check(r.ref_to_dist, Direction::kRefToDist);
-  if (!std::isfinite(r.score)) {
+  if (!acceptable_score(spec, r.score)) {
     throw NumericError(spec.title + ": the score " + short_number(r.score) + " is not finite");
   }
 }

@@ -286,6 +286,7 @@ class Cursor {
 struct VertexLayout {
   int x = -1, y = -1, z = -1;
   int red = -1, green = -1, blue = -1;
+  int nx = -1, ny = -1, nz = -1;  // all three or none
 };
 
 int find_property(const Element& e, const std::string& name) {
@@ -311,6 +312,12 @@ VertexLayout vertex_layout(const Element& e, const std::string& name) {
       l.blue = b;
       break;
     }
+  }
+  const int nx = find_property(e, "nx"), ny = find_property(e, "ny"), nz = find_property(e, "nz");
+  if (nx >= 0 && ny >= 0 && nz >= 0) {
+    l.nx = nx;
+    l.ny = ny;
+    l.nz = nz;
   }
   return l;
 }
@@ -344,6 +351,7 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
     reserve_with_huge_pages(out.colors, e.count);
     out.colors.resize(e.count);
   }
+  if (l.nx >= 0) out.normals.resize(e.count);
   std::vector<double> values(e.properties.size());
   std::string where;
   for (std::uint64_t i = 0; i < e.count; ++i) {
@@ -368,6 +376,7 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
     if (out.color_encoding != ColorEncoding::kNone) {
       out.colors[i] = {values[l.red], values[l.green], values[l.blue]};
     }
+    if (l.nx >= 0) out.normals[i] = {values[l.nx], values[l.ny], values[l.nz]};
   }
 }
 

@@ -46,4 +46,11 @@ void combine_directions(MetricResult& result) {
   }
 }
 
+std::optional<double> find_value(const NamedValues& values, const std::string& name) {
+  for (const auto& [n, v] : values) {
+    if (n == name) return v;
+  }
+  return std::nullopt;
+}
+
 }  // namespace qm3d

@@ -23,9 +23,19 @@ nlohmann::json features_json(const MetricResult& r, const FeatureVector& f) {
   return j;
 }
 
+nlohmann::json values_json(const NamedValues& values) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, v] : values) j[name] = number(v);
+  return j;
+}
+
 // `bbox_max_side` is the name of `box_size` before it was named for what it is; kept so that
-// existing readers of the JSON keep working.
+// existing readers of the JSON keep working. A metric of named values has no f1..f8 and no box.
 void add_direction(nlohmann::json& j, const MetricResult& r, const DirectionResult& d) {
+  if (!d.values.empty() || (r.feature_names.empty() && !r.values.empty())) {
+    j["features"] = values_json(d.values);
+    return;
+  }
   j["features"] = features_json(r, d.features);
   j["box_size"] = number(d.box_size);
   j["bbox_max_side"] = number(d.box_size);
@@ -36,13 +46,36 @@ std::string upper(std::string s) {
   return s;
 }
 
-void append_direction(std::ostringstream& row, const std::optional<DirectionResult>& d) {
+void append_direction(std::ostringstream& row, const std::optional<DirectionResult>& d,
+                      bool has_features) {
   if (!d) {
     row << std::string(2 + kNumFeatures, ',');
     return;
   }
-  row << ',' << format_double(d->score) << ',' << format_double(d->box_size);
+  row << ',' << format_double(d->score) << ',';
+  if (!has_features) {  // a metric of named values: no box, no f1..f8
+    row << std::string(kNumFeatures, ',');
+    return;
+  }
+  row << format_double(d->box_size);
   for (double f : d->features) row << ',' << format_double(f);
+}
+
+void append_values(std::ostringstream& row, const NamedValues* values,
+                   const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    row << ',';
+    if (values == nullptr) continue;
+    if (const auto v = find_value(*values, name)) row << format_double(*v);
+  }
+}
+
+void append_all_values(std::ostringstream& row, const MetricResult* r,
+                       const std::vector<std::string>& names) {
+  if (names.empty()) return;
+  append_values(row, r ? &r->values : nullptr, names);
+  append_values(row, r && r->dist_to_ref ? &r->dist_to_ref->values : nullptr, names);
+  append_values(row, r && r->ref_to_dist ? &r->ref_to_dist->values : nullptr, names);
 }
 
 }  // namespace
@@ -73,6 +106,7 @@ std::string text_line(const MetricResult& r) {
   } else if (r.ref_to_dist) {
     o << "  (ref\u2192dist)";
   }
+  if (!r.text_note.empty()) o << "  " << r.text_note;
   return o.str();
 }
 
@@ -96,9 +130,12 @@ nlohmann::json to_json(const MetricResult& r) {
   }
   j["directions"] = directions;
   // One direction: its features at the top level too (PCQM's own output is its one direction).
-  if (static_cast<bool>(r.dist_to_ref) != static_cast<bool>(r.ref_to_dist)) {
+  if (!r.values.empty()) {
+    j["features"] = values_json(r.values);
+  } else if (static_cast<bool>(r.dist_to_ref) != static_cast<bool>(r.ref_to_dist)) {
     add_direction(j, r, r.any_direction());
   }
+  for (const auto& [key, value] : r.details.items()) j[key] = value;
   j["warnings"] = r.warnings;
   return j;
 }
@@ -114,34 +151,43 @@ nlohmann::json compare_json(const std::vector<MetricResult>& results) {
   return j;
 }
 
-std::string csv_header() {
+std::string csv_header(const std::vector<std::string>& value_names) {
   std::ostringstream h;
   h << "reference,distorted,metric,score,status,error,seconds";
   for (const char* d : kDirectionColumns) {
     h << ',' << d << "_score," << d << "_bbox_max_side";
     for (std::size_t k = 1; k <= kNumFeatures; ++k) h << ',' << d << "_f" << k;
   }
+  for (const std::string& name : value_names) h << ',' << name;
+  for (const char* d : kDirectionColumns) {
+    for (const std::string& name : value_names) h << ',' << d << '_' << name;
+  }
   return h.str();
 }
 
-std::string csv_row(const MetricResult& r, const std::string& error) {
+std::string csv_row(const MetricResult& r, const std::string& error,
+                    const std::vector<std::string>& value_names) {
   std::ostringstream row;
   row << csv_field(r.provenance.reference) << ',' << csv_field(r.provenance.distorted) << ','
       << csv_field(r.metric) << ',' << format_double(r.score) << ','
       << (error.empty() ? "ok" : "error") << ',' << csv_field(error) << ','
       << format_double(r.provenance.seconds);
-  append_direction(row, r.dist_to_ref);
-  append_direction(row, r.ref_to_dist);
+  const bool has_features = !r.feature_names.empty() || r.values.empty();
+  append_direction(row, r.dist_to_ref, has_features);
+  append_direction(row, r.ref_to_dist, has_features);
+  append_all_values(row, &r, value_names);
   return row.str();
 }
 
 std::string csv_error_row(const std::string& reference, const std::string& distorted,
-                          const std::string& metric, const std::string& error) {
+                          const std::string& metric, const std::string& error,
+                          const std::vector<std::string>& value_names) {
   std::ostringstream row;
   row << csv_field(reference) << ',' << csv_field(distorted) << ',' << csv_field(metric)
       << ",,error," << csv_field(error) << ',';
-  append_direction(row, std::nullopt);
-  append_direction(row, std::nullopt);
+  append_direction(row, std::nullopt, true);
+  append_direction(row, std::nullopt, true);
+  append_all_values(row, nullptr, value_names);
   return row.str();
 }
 

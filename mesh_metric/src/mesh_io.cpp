@@ -448,7 +448,7 @@ CloudData read_mesh_vertices_data(const std::filesystem::path& path, MeshFormat 
   const std::string bytes = read_file_bytes(path);
   if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
     MeshFile file = parse_textured_obj(bytes, path).file;
-    return CloudData{vertex_cloud(file.mesh), std::move(file.warnings)};
+    return CloudData{vertex_cloud(file.mesh), std::move(file.warnings), {}};
   }
   RawMesh raw = parse_raw(bytes, format, path.string(), options.colour_scale);
   if (raw.positions.empty()) fail(path.string(), "no vertices");

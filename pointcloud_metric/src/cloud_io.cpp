@@ -41,14 +41,15 @@ FormatError no_colours(const std::filesystem::path& path, const std::string& exp
                      "expected " + expected + ")");
 }
 
+// A PLY without colours gives a cloud with no colours (psnr scores its geometry); the metrics
+// that need colours say so with the input's name (require_colours).
 CloudData read_ply(const std::filesystem::path& path, ColourScale colour_scale) {
   // ASCII `float` values as float32, as the reference's tinyply reads them (SPEC-PCQM §9.1).
   ply::Content content = ply::read(path, ply::AsciiFloat::kAsDeclared, colour_scale);
-  if (content.colors.empty()) {
-    throw no_colours(path, "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties");
-  }
-  return CloudData{ColoredCloud{std::move(content.positions), std::move(content.colors)},
-                   std::move(content.warnings)};
+  CloudData out{ColoredCloud{std::move(content.positions), std::move(content.colors)},
+                std::move(content.warnings), {}};
+  out.normals = std::move(content.normals);
+  return out;
 }
 
 void require_readable(const std::filesystem::path& path) {
@@ -555,16 +556,26 @@ CloudData read_cloud_data(const std::filesystem::path& path, CloudFormat format,
   return format == CloudFormat::kPcd ? read_pcd(path) : read_ply(path, options.colour_scale);
 }
 
+void require_colours(const ColoredCloud& cloud, const std::string& name) {
+  if (cloud.colors.empty() && !cloud.positions.empty()) {
+    throw FormatError(name +
+                      ": no vertex colours (PCQM needs one colour per point; expected "
+                      "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties)");
+  }
+}
+
 ColoredCloud read_cloud(const std::filesystem::path& path) {
   const std::string ext = lower(path.extension().string());
-  if (ext == ".ply") return read_cloud_data(path, CloudFormat::kPly).cloud;
-  if (ext == ".pcd") return read_cloud_data(path, CloudFormat::kPcd).cloud;
+  if (ext == ".ply") return read_cloud(path, CloudFormat::kPly);
+  if (ext == ".pcd") return read_cloud(path, CloudFormat::kPcd);
   throw FormatError(path.string() + ": unknown point-cloud extension '" +
                     path.extension().string() + "' (expected .ply or .pcd)");
 }
 
 ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format) {
-  return read_cloud_data(path, format).cloud;
+  ColoredCloud cloud = read_cloud_data(path, format).cloud;
+  require_colours(cloud, path.string());
+  return cloud;
 }
 
 }  // namespace qm3d::pointcloud

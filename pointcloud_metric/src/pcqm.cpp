@@ -12,6 +12,7 @@
 #include "qm3d/common/metric.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/version.h"
+#include "qm3d/pointcloud/cloud_io.h"
 #include "qm3d/pointcloud/metrics.h"
 
 namespace qm3d::pointcloud {
@@ -253,6 +254,8 @@ MetricSpec pcqm_spec() {
   s.options = detail::pcqm_option_specs();
   s.run = [](const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
              const OptionValues& values) {
+    require_colours(ref.cloud(), ref.name());
+    require_colours(dist.cloud(), dist.name());
     return compute_pcqm(ref.cloud(), dist.cloud(), detail::pcqm_options(run, values));
   };
   return s;

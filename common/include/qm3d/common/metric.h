@@ -87,6 +87,9 @@ class Input {
   const ColoredCloud& cloud() const;
   /// What the reader of cloud() warned of (empty for data in memory); reads the cloud.
   std::vector<std::string> cloud_warnings() const;
+  /// The normals the cloud's file holds (PLY nx, ny, nz), one per point of cloud(), as stored;
+  /// empty when it has none (and for data in memory). Reads the cloud.
+  const std::vector<Vec3>& cloud_normals() const;
   /// Reads now what `kind` needs (so that two inputs can be read concurrently).
   void load(Kind as) const;
   /// Frees what was read from the file (it is read again if used later); data given in memory
@@ -151,6 +154,9 @@ struct MetricSpec {
   std::string name;     ///< "cmdm": the command, the batch list's metric, the result's metric
   std::string title;    ///< "CMDM": how the tool prints it
   std::string summary;  ///< one line for --help
+  /// The score is a quality (PSNR: higher is better; +inf for identical inputs), not a
+  /// distortion (0 = identical, higher is worse).
+  bool higher_is_better = false;
   AppliesTo applies_to = AppliesTo::kBoth;
   /// How the metric reads its inputs: as meshes (faces used) or as clouds (any mesh's vertices).
   Input::Kind reads = Input::Kind::kCloud;
@@ -167,6 +173,9 @@ struct MetricSpec {
   const std::string& model_name() const { return model_metric.empty() ? name : model_metric; }
   std::vector<OptionSpec> options;
   MetricRunner run;
+  /// The names of the values the metric reports by name (MetricResult::values and each
+  /// DirectionResult::values: their CSV columns), in order; empty for f1..f8 metrics.
+  std::vector<std::string> value_names;
 
   /// True when the metric scores this pair of inputs.
   bool applies(const Input& reference, const Input& distorted) const;
@@ -208,6 +217,10 @@ class Registry {
   Readers readers_;
   SurfaceSampler sampler_;
 };
+
+/// The named-value columns of a CSV holding results of these metrics (csv_header): the union
+/// of their value_names, in order of first appearance.
+std::vector<std::string> csv_value_names(const std::vector<const MetricSpec*>& specs);
 
 /// The most OpenMP threads a run may use: kThreadsPerCore per core the machine reports
 /// (std::thread::hardware_concurrency, 1 when unknown), and never fewer than kMinThreadLimit.

@@ -53,6 +53,9 @@ struct Content {
   /// Empty when there are none.
   std::vector<Rgb> colors;
   ColorEncoding color_encoding = ColorEncoding::kNone;
+  /// Vertex normals (nx, ny, nz of any scalar type, values as stored: not normalised, NaN
+  /// kept); empty when the vertex element lacks one of them.
+  std::vector<Vec3> normals;
   /// Faces as polygons in compressed form: face f has vertices
   /// face_indices[face_offsets[f] .. face_offsets[f + 1]). face_offsets has #F + 1 entries.
   std::vector<std::uint32_t> face_offsets{0};

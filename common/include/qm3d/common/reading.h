@@ -37,6 +37,8 @@ struct ReadOptions {
 struct CloudData {
   ColoredCloud cloud;
   std::vector<std::string> warnings;
+  /// The file's normals (PLY nx, ny, nz), one per point as stored; empty when it has none.
+  std::vector<Vec3> normals;
 };
 
 /// What a reader saw of a file's float colour values, to choose their scale.

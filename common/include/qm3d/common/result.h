@@ -62,6 +62,15 @@ struct RunOptions {
   std::function<void()> inputs_done;
 };
 
+/// Values a metric reports by name instead of (or beside) f1..f8 (psnr: d1_mse, d1_psnr, ...), in
+/// the metric's order; a name the metric could not compute is left out (psnr's d2_* without
+/// normals). +inf is a legitimate value (the PSNR of identical clouds: JSON null, text and CSV
+/// "inf"); NaN never is (run_metric rejects it).
+using NamedValues = std::vector<std::pair<std::string, double>>;
+
+/// The value of that name, or nullopt.
+std::optional<double> find_value(const NamedValues& values, const std::string& name);
+
 /// One direction of a metric.
 struct DirectionResult {
   double score = 0;          ///< the direction's pooled score
@@ -73,6 +82,9 @@ struct DirectionResult {
   /// Local distortion of each element of the iterated object, in its input order; empty when
   /// RunOptions::per_element is false.
   std::vector<double> per_element;
+  /// The metric's named values of this direction (MetricSpec::value_names); empty for the
+  /// metrics whose features are f1..f8.
+  NamedValues values;
 };
 
 /// Where a result comes from: enough to reproduce it.
@@ -96,6 +108,14 @@ struct MetricResult {
   std::vector<std::string> feature_names;
   std::vector<std::string> warnings;  ///< repairs and caveats (also printed by the tool)
   Provenance provenance;
+  /// The named values of the result as a whole (psnr: pc_error's symmetric "Final" values, or
+  /// the one direction's); written as the JSON's top-level `features`. Empty for f1..f8 metrics.
+  NamedValues values;
+  /// Further top-level JSON entries of the metric (psnr: peak, point counts, duplicates).
+  nlohmann::json details = nlohmann::json::object();
+  /// What the human line ends with, when the metric has more to say than its scores (psnr: the
+  /// symmetric D1/D2/colour PSNRs and the peak).
+  std::string text_note;
 
   /// The direction that was computed, or (symmetric) dist_to_ref when `prefer_dist` else
   /// ref_to_dist. Throws std::logic_error when none is set.

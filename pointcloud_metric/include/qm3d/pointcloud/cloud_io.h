@@ -45,7 +45,12 @@ ColoredCloud read_cloud(const std::filesystem::path& path, CloudFormat format);
 /// read_cloud with the reader's options (the scale of PLY float colours) and its warnings: a
 /// colour scale chosen on thin evidence, float32 coordinates whose rounding is large against
 /// the point spacing (qm3d/common/reading.h). What the metric registry's cloud reader returns.
+/// Unlike read_cloud, a PLY without colours gives a cloud without colours (and a PLY's nx, ny,
+/// nz are kept in CloudData::normals).
 CloudData read_cloud_data(const std::filesystem::path& path, CloudFormat format,
                           const ReadOptions& options = {});
+
+/// FormatError "<name>: no vertex colours (PCQM needs ...)" when a non-empty cloud has none.
+void require_colours(const ColoredCloud& cloud, const std::string& name);
 
 }  // namespace qm3d::pointcloud

@@ -13,6 +13,9 @@ MetricSpec pcqm_spec();
 /// `sample` (the mesh module's sampler); PCQM's options plus points, density, seed.
 MetricSpec pcqm_sampled_spec(SurfaceSampler sample);
 
+/// "psnr" (psnr.cpp): MPEG pc_error's D1/D2/colour values of two clouds (qm3d/pointcloud/psnr.h).
+MetricSpec psnr_spec();
+
 /// Samples drawn from each mesh by pcqm_sampled when no points / density is given.
 inline constexpr int kDefaultSampledPoints = 20000;
 

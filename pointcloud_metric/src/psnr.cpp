@@ -1,0 +1,696 @@
+// pc_error's D1/D2/colour values (qm3d/pointcloud/psnr.h). The rules, each where pc_error 0.14.2
+// has it (MPEGGroup/mpeg-pcc-dmetric bd6df59; D: source/pcc_distortion.cpp, P:
+// source/pcc_processing.cpp):
+// - Loading (P: load): float32 coordinates and normals, 8-bit colours, sorted, duplicates
+//   averaged / dropped / kept (psnr_engine.cpp).
+// - Peak (D: computeQualityMetric, findNNdistances): -r as float32; else the largest distance of
+//   a point to its nearest other point of A (3-NN; a point whose first neighbour is not itself, or
+//   whose second is within 1e-5, is skipped).
+// - B's normals (D: scaleNormals, averageNormals = 1): every point of A adds its normal (float
+//   sums, in A's order) to each point of B at exactly its nearest distance (the first 5, 10, ...
+//   up to 30 neighbours searched while the first and the last tie); a point of B that received
+//   nothing takes the mean of A's normals at exactly its nearest distance; then each sum is
+//   divided by its count. averageNormals = 0: nearest point only. The pass B -> A uses A's own.
+// - Per point of A (D: findMetric): its 10 nearest in B (15, ... 30 while the first and the last
+//   tie, with averageNormals); the "same distance" set: the first, then each next one whose
+//   squared distance is within 1e-8 of the previous one's (absolute, chained). D1 = squared
+//   distance to the first (double differences of the floats). D2 (averageNormals) = mean over
+//   the set of ((a - b) . n_b)^2 in float arithmetic (powf); else (e . n_first)^2 in double.
+//   Colour (neighborsProc 1, 2) = the set's mean colour (weighted by merged duplicates for 2),
+//   rounded; the per-channel error (in - out)^2 in float in the colour space, and in RGB for the
+//   colour Hausdorff.
+// - MSE = sum / #A; Hausdorff = max (starting at DBL_MIN); PSNR 10 log10(f p^2 / x), f = 3 for
+//   geometry; symmetric = worse of the two directions per value.
+// What qm3d does differently, documented in the README: the sums run in point order in fixed
+// chunks (pc_error adds in thread order: same to ~1e-15 relative, and the same bits here for any
+// thread count); a zero Hausdorff is reported as 0 with an infinite PSNR (pc_error prints
+// DBL_MIN and 10 log10(3 p^2 / DBL_MIN)); NaN normals are refused (pc_error adds an unsquared
+// sum of differences for them); clouds of fewer than 10 points use what they have.
+#include "qm3d/pointcloud/psnr.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "pca_normals.h"
+#include "psnr_engine.h"
+#include "qm3d/pointcloud/cloud_io.h"
+#include "qm3d/pointcloud/metrics.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
+#include "qm3d/common/result_io.h"
+#include "qm3d/common/version.h"
+
+namespace qm3d::pointcloud {
+
+using detail::Colour8;
+using detail::kMaxNeighbours;
+using detail::MpegCloud;
+using detail::MpegTree;
+using detail::Point3f;
+
+const std::vector<std::string>& psnr_value_names() {
+  static const std::vector<std::string> names = {
+      "d1_mse",       "d1_psnr",      "d2_mse",           "d2_psnr",           "d1_hausdorff",
+      "d1_hausdorff_psnr", "d2_hausdorff", "d2_hausdorff_psnr", "c0_mse",      "c1_mse",
+      "c2_mse",       "c0_psnr",      "c1_psnr",          "c2_psnr",           "c0_hausdorff",
+      "c1_hausdorff", "c2_hausdorff", "c0_hausdorff_psnr", "c1_hausdorff_psnr", "c2_hausdorff_psnr"};
+  return names;
+}
+
+namespace {
+
+/// pc_error's similarPointThreshold (D: computeQualityMetric's default argument).
+constexpr double kTieThreshold = 1e-8;
+/// Points per chunk of the sums (fixed: the sums do not depend on the thread count).
+constexpr std::size_t kChunk = 4096;
+
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+/// D: getPSNR.
+double psnr_of(double dist2, double peak, double factor = 1.0) {
+  const double max_energy = peak * peak;
+  return 10 * std::log10((factor * max_energy) / dist2);
+}
+
+/// D: convertRGBtoYUV.
+std::array<float, 3> convert(PsnrColourSpace space, const Colour8& rgb) {
+  switch (space) {
+    case PsnrColourSpace::kRgb:
+      return {float(rgb[0]), float(rgb[1]), float(rgb[2])};
+    case PsnrColourSpace::kYCoCg: {
+      const int r = rgb[0], g = rgb[1], b = rgb[2];
+      const int co = r - b;
+      const int t = b + (co >> 1);
+      const int cg = g - t;
+      const int y = t + (cg >> 1);
+      constexpr int kOffset = 1 << 8;
+      return {float(y), float(co + kOffset), float(cg + kOffset)};
+    }
+    case PsnrColourSpace::kYCbCr:
+      break;
+  }
+  const double r = rgb[0], g = rgb[1], b = rgb[2];
+  return {float((0.2126 * r + 0.7152 * g + 0.0722 * b) / 255.0),
+          float((-0.1146 * r - 0.3854 * g + 0.5000 * b) / 255.0 + 0.5000),
+          float((0.5000 * r - 0.4542 * g - 0.0458 * b) / 255.0 + 0.5000)};
+}
+
+std::array<double, 3> colour_peaks(PsnrColourSpace space) {
+  switch (space) {
+    case PsnrColourSpace::kRgb: return {255, 255, 255};
+    case PsnrColourSpace::kYCoCg: return {255, 511, 511};
+    case PsnrColourSpace::kYCbCr: break;
+  }
+  return {1, 1, 1};
+}
+
+std::array<const char*, 3> channel_names(PsnrColourSpace space) {
+  switch (space) {
+    case PsnrColourSpace::kRgb: return {"R", "G", "B"};
+    case PsnrColourSpace::kYCoCg: return {"Y", "Co", "Cg"};
+    case PsnrColourSpace::kYCbCr: break;
+  }
+  return {"Y", "Cb", "Cr"};
+}
+
+// ---- peak -------------------------------------------------------------------------------------
+
+struct NnDistances {
+  double min = DBL_MAX;
+  double max = DBL_MIN;  // D: findNNdistances starts at numeric_limits<double>::min()
+};
+
+NnDistances nn_distances(const MpegCloud& a, const MpegTree& tree, int threads) {
+  const long n = static_cast<long>(a.size());
+  NnDistances out;
+#pragma omp parallel num_threads(thread_count(threads))
+  {
+    NnDistances local;
+#pragma omp for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      std::uint32_t idx[3];
+      double d2[3];
+      const std::size_t found = tree.knn(a.points[i], 3, idx, d2);
+      if (found < 2 || idx[0] != static_cast<std::uint32_t>(i) || d2[1] <= 0.0000000001) continue;
+      const double d = std::sqrt(d2[1]);
+      local.max = std::max(local.max, d);
+      local.min = std::min(local.min, d);
+    }
+#pragma omp critical
+    {
+      out.max = std::max(out.max, local.max);
+      out.min = std::min(out.min, local.min);
+    }
+  }
+  return out;
+}
+
+// ---- B's normals (D: scaleNormals) ------------------------------------------------------------
+
+/// The indices among the first `found` results at exactly the first one's distance.
+std::size_t exact_ties(const std::uint32_t* idx, const double* d2, std::size_t found,
+                       std::uint32_t* out) {
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < found; ++j) {
+    if (d2[0] == d2[j]) out[n++] = idx[j];
+  }
+  return n;
+}
+
+std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tree,
+                                      const MpegCloud& b, const MpegTree& b_tree, bool average,
+                                      int threads) {
+  const long n_a = static_cast<long>(na.size());
+  const long n_b = static_cast<long>(b.size());
+  // Each point of A's targets in B (searched in parallel, added in A's order: float sums).
+  std::vector<std::array<std::uint32_t, kMaxNeighbours>> targets(static_cast<std::size_t>(n_a));
+  std::vector<std::uint8_t> target_count(static_cast<std::size_t>(n_a));
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(thread_count(threads))
+  for (long i = 0; i < n_a; ++i) {
+    std::uint32_t idx[kMaxNeighbours];
+    double d2[kMaxNeighbours];
+    const std::size_t found =
+        average ? b_tree.expanding_knn(na.points[i], 5, true, idx, d2) : b_tree.knn(na.points[i], 1, idx, d2);
+    target_count[i] = static_cast<std::uint8_t>(exact_ties(idx, d2, average ? found : std::min<std::size_t>(found, 1), targets[i].data()));
+  }
+  std::vector<Point3f> normals(static_cast<std::size_t>(n_b), Point3f{0, 0, 0});
+  std::vector<int> counts(static_cast<std::size_t>(n_b), 0);
+  for (long i = 0; i < n_a; ++i) {
+    for (std::size_t t = 0; t < target_count[i]; ++t) {
+      const std::uint32_t j = targets[i][t];
+      for (int c = 0; c < 3; ++c) normals[j][c] += na.normals[i][c];
+      ++counts[j];
+    }
+  }
+  targets = {};
+#pragma omp parallel for schedule(dynamic, 1024) num_threads(thread_count(threads))
+  for (long i = 0; i < n_b; ++i) {
+    Point3f& n = normals[i];
+    if (counts[i] > 0) {
+      for (int c = 0; c < 3; ++c) n[c] = n[c] / counts[i];
+      continue;
+    }
+    std::uint32_t idx[kMaxNeighbours];
+    double d2[kMaxNeighbours];
+    if (!average) {
+      na_tree.knn(b.points[i], 1, idx, d2);
+      n = na.normals[idx[0]];
+      continue;
+    }
+    const std::size_t found = na_tree.expanding_knn(b.points[i], 5, true, idx, d2);
+    std::uint32_t ties[kMaxNeighbours];
+    const std::size_t num = exact_ties(idx, d2, found, ties);
+    for (std::size_t t = 0; t < num; ++t) {
+      for (int c = 0; c < 3; ++c) n[c] += na.normals[ties[t]][c];
+    }
+    for (int c = 0; c < 3; ++c) n[c] /= static_cast<float>(num);
+  }
+  return normals;
+}
+
+// ---- one direction (D: findMetric) -------------------------------------------------------------
+
+struct PassSettings {
+  bool colour = false;
+  PsnrColourSpace space = PsnrColourSpace::kYCbCr;
+  bool weighted = false;  // neighborsProc 2
+  bool average_normals = true;
+  bool keep_points = false;
+};
+
+struct PassSums {
+  double d1_sum = 0, d2_sum = 0;
+  double d1_max = DBL_MIN, d2_max = DBL_MIN;
+  std::array<double, 3> colour_sum{0, 0, 0};
+  std::array<double, 3> rgb_max{DBL_MIN, DBL_MIN, DBL_MIN};
+
+  void add(const PassSums& o) {
+    d1_sum += o.d1_sum;
+    d2_sum += o.d2_sum;
+    d1_max = std::max(d1_max, o.d1_max);
+    d2_max = std::max(d2_max, o.d2_max);
+    for (int c = 0; c < 3; ++c) {
+      colour_sum[c] += o.colour_sum[c];
+      rgb_max[c] = std::max(rgb_max[c], o.rgb_max[c]);
+    }
+  }
+};
+
+struct PassOutput {
+  PassSums sums;
+  std::size_t points = 0;
+  std::vector<double> d1;  // per point of A (keep_points)
+};
+
+// One point of A against B: adds its errors to `s`; returns its D1 error.
+double point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
+                    const std::vector<Point3f>* normals, const PassSettings& p, PassSums& s) {
+  std::uint32_t idx[kMaxNeighbours];
+  double d2[kMaxNeighbours];
+  const Point3f& q = a.points[i];
+  const std::size_t found = tree.expanding_knn(q, 10, p.average_normals, idx, d2);
+  const std::uint32_t j = idx[0];
+  std::size_t same = 1;
+  if (p.colour || normals != nullptr) {
+    while (same < found && std::fabs(d2[same] - d2[same - 1]) < kTieThreshold) ++same;
+  }
+  const Point3f& nearest = b.points[j];
+  const double e0 = double(q[0]) - double(nearest[0]);
+  const double e1 = double(q[1]) - double(nearest[1]);
+  const double e2 = double(q[2]) - double(nearest[2]);
+  const double d1 = e0 * e0 + e1 * e1 + e2 * e2;
+  s.d1_sum += d1;
+  s.d1_max = std::max(s.d1_max, d1);
+  if (normals != nullptr) {
+    double d2_point = 0.0;
+    if (p.average_normals) {
+      for (std::size_t t = 0; t < same; ++t) {
+        const Point3f& o = b.points[idx[t]];
+        const Point3f& n = (*normals)[idx[t]];
+        const float dot = (q[0] - o[0]) * n[0] + (q[1] - o[1]) * n[1] + (q[2] - o[2]) * n[2];
+        d2_point += std::pow(dot, 2.f);  // float powf, as pc_error's pow(float, float)
+      }
+      d2_point /= static_cast<double>(same);
+    } else {
+      const Point3f& n = (*normals)[j];
+      d2_point = e0 * n[0] + e1 * n[1] + e2 * n[2];
+      d2_point *= d2_point;
+    }
+    s.d2_sum += d2_point;
+    s.d2_max = std::max(s.d2_max, d2_point);
+  }
+  if (p.colour) {
+    unsigned int sum[3] = {0, 0, 0};
+    int merged = 0;
+    for (std::size_t t = 0; t < same; ++t) {
+      const int weight = p.weighted ? b.merged[idx[t]] : 1;
+      for (int c = 0; c < 3; ++c) sum[c] += weight * b.colours[idx[t]][c];
+      merged += weight;
+    }
+    Colour8 matched;
+    for (int c = 0; c < 3; ++c) {
+      matched[c] = static_cast<std::uint8_t>(std::round(static_cast<double>(sum[c]) / merged));
+    }
+    const std::array<float, 3> in = convert(p.space, a.colours[i]);
+    const std::array<float, 3> out = convert(p.space, matched);
+    for (int c = 0; c < 3; ++c) {
+      const float diff = in[c] - out[c];
+      s.colour_sum[c] += static_cast<float>(diff * diff);
+      const int rgb = int(a.colours[i][c]) - int(matched[c]);
+      s.rgb_max[c] = std::max(s.rgb_max[c], static_cast<double>(rgb * rgb));
+    }
+  }
+  return d1;
+}
+
+PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tree,
+                    const std::vector<Point3f>* normals, const PassSettings& p, int threads) {
+  PassOutput out;
+  out.points = a.size();
+  if (p.keep_points) out.d1.resize(a.size());
+  const long chunks = static_cast<long>((a.size() + kChunk - 1) / kChunk);
+  std::vector<PassSums> partial(static_cast<std::size_t>(chunks));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(threads))
+  for (long c = 0; c < chunks; ++c) {
+    const std::size_t first = static_cast<std::size_t>(c) * kChunk;
+    const std::size_t last = std::min(a.size(), first + kChunk);
+    PassSums s;
+    for (std::size_t i = first; i < last; ++i) {
+      const double d1 = point_errors(a, i, b, b_tree, normals, p, s);
+      if (p.keep_points) out.d1[i] = d1;
+    }
+    partial[c] = s;
+  }
+  for (const PassSums& s : partial) out.sums.add(s);  // in chunk order: any thread count
+  return out;
+}
+
+// ---- results ------------------------------------------------------------------------------------
+
+/// A Hausdorff value as qm3d reports it: pc_error's untouched DBL_MIN start is a zero.
+double hausdorff_value(double max) { return max <= DBL_MIN ? 0.0 : max; }
+
+double hausdorff_psnr(double h, double peak, double factor) {
+  return h == 0.0 ? HUGE_VAL : psnr_of(h, peak, factor);
+}
+
+NamedValues pass_values(const PassOutput& o, double peak, bool d2, const PassSettings& p,
+                        bool hausdorff) {
+  const double n = static_cast<double>(o.points);
+  NamedValues v;
+  const double d1_mse = o.sums.d1_sum / n;
+  v.emplace_back("d1_mse", d1_mse);
+  v.emplace_back("d1_psnr", psnr_of(d1_mse, peak, 3));
+  if (d2) {
+    const double d2_mse = o.sums.d2_sum / n;
+    v.emplace_back("d2_mse", d2_mse);
+    v.emplace_back("d2_psnr", psnr_of(d2_mse, peak, 3));
+  }
+  if (hausdorff) {
+    const double h1 = hausdorff_value(o.sums.d1_max);
+    v.emplace_back("d1_hausdorff", h1);
+    v.emplace_back("d1_hausdorff_psnr", hausdorff_psnr(h1, peak, 3));
+    if (d2) {
+      const double h2 = hausdorff_value(o.sums.d2_max);
+      v.emplace_back("d2_hausdorff", h2);
+      v.emplace_back("d2_hausdorff_psnr", hausdorff_psnr(h2, peak, 3));
+    }
+  }
+  if (!p.colour) return v;
+  const std::array<double, 3> peaks = colour_peaks(p.space);
+  std::array<double, 3> mse;
+  for (int c = 0; c < 3; ++c) {
+    mse[c] = o.sums.colour_sum[c] / n;
+    v.emplace_back("c" + std::to_string(c) + "_mse", mse[c]);
+  }
+  for (int c = 0; c < 3; ++c) v.emplace_back("c" + std::to_string(c) + "_psnr", psnr_of(mse[c], peaks[c]));
+  if (!hausdorff) return v;
+  std::array<double, 3> h;
+  for (int c = 0; c < 3; ++c) {
+    h[c] = hausdorff_value(o.sums.rgb_max[c]);
+    v.emplace_back("c" + std::to_string(c) + "_hausdorff", h[c]);
+  }
+  for (int c = 0; c < 3; ++c) {
+    v.emplace_back("c" + std::to_string(c) + "_hausdorff_psnr", hausdorff_psnr(h[c], 255.0, 1));
+  }
+  return v;
+}
+
+/// pc_error's "3. Final (symmetric)": the larger error and the smaller PSNR of each value.
+NamedValues symmetric_values(const NamedValues& a, const NamedValues& b) {
+  NamedValues out;
+  for (const auto& [name, va] : a) {
+    const double vb = *find_value(b, name);
+    const bool quality = name.size() > 5 && name.compare(name.size() - 5, 5, "_psnr") == 0;
+    out.emplace_back(name, quality ? std::min(va, vb) : std::max(va, vb));
+  }
+  return out;
+}
+
+DirectionResult direction_result(const NamedValues& values, const PassOutput& o,
+                                 const MpegCloud& iterated, bool per_element) {
+  DirectionResult d;
+  d.score = *find_value(values, "d1_psnr");
+  d.features.fill(0.0);
+  d.values = values;
+  if (per_element) {  // on the input's points: a merged duplicate takes its run's value
+    d.per_element.resize(iterated.of_input.size());
+    for (std::size_t k = 0; k < iterated.of_input.size(); ++k) {
+      d.per_element[k] = o.d1[iterated.of_input[k]];
+    }
+  }
+  return d;
+}
+
+// ---- checks -------------------------------------------------------------------------------------
+
+void check_cloud(const ColoredCloud& c, const std::string& name, bool colour) {
+  if (c.positions.empty()) throw NumericError("psnr: " + name + ": the cloud is empty");
+  for (std::size_t i = 0; i < c.positions.size(); ++i) {
+    for (double v : c.positions[i]) {
+      if (!std::isfinite(v) || std::fabs(v) > FLT_MAX) {
+        throw NumericError("psnr: " + name + ": point " + std::to_string(i) +
+                           " has a coordinate that is not a finite float32 (" + short_number(v) + ")");
+      }
+    }
+  }
+  if (colour && c.colors.empty()) {
+    throw FormatError(name + ": no vertex colours (psnr's colour values need one colour per point; "
+                      "give --no-colour for geometry only)");
+  }
+  if (colour && c.colors.size() != c.positions.size()) {
+    throw FormatError(name + ": " + std::to_string(c.positions.size()) + " points but " +
+                      std::to_string(c.colors.size()) + " colours");
+  }
+}
+
+void check_normals(const std::vector<Vec3>& normals, std::size_t points, const std::string& name) {
+  if (normals.empty()) return;
+  if (normals.size() != points) {
+    throw FormatError(name + ": " + std::to_string(normals.size()) + " normals for " +
+                      std::to_string(points) + " reference points (one normal per point needed)");
+  }
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    for (double v : normals[i]) {
+      if (!std::isfinite(v) || std::fabs(v) > FLT_MAX) {
+        throw FormatError(name + ": the normal of point " + std::to_string(i) +
+                          " is not finite (" + short_number(v) + ")");
+      }
+    }
+  }
+}
+
+/// --normals estimate: ../shared/tools/add_pca_normals.py's normals (float32, as it writes them).
+std::vector<Vec3> estimated_normals(const std::vector<Vec3>& positions, int threads) {
+  const std::vector<std::array<float, 3>> f = detail::estimate_pca_normals(positions, threads);
+  std::vector<Vec3> out(f.size());
+  for (std::size_t i = 0; i < f.size(); ++i) out[i] = {f[i][0], f[i][1], f[i][2]};
+  return out;
+}
+
+std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak, bool peak_given) {
+  std::ostringstream out;
+  const auto value = [&](const char* name) { return short_number(*find_value(v, name)); };
+  out << "[D1 " << value("d1_psnr") << " dB";
+  if (find_value(v, "d2_psnr")) out << ", D2 " << value("d2_psnr") << " dB";
+  if (o.colour) {
+    const auto names = channel_names(o.colour_space);
+    for (int c = 0; c < 3; ++c) {
+      out << ", " << names[c] << ' ' << value(("c" + std::to_string(c) + "_psnr").c_str()) << " dB";
+    }
+  }
+  out << "; peak " << short_number(peak)
+      << (peak_given ? " (given)" : " (largest nearest-neighbour distance in the reference)") << "]";
+  return out.str();
+}
+
+}  // namespace
+
+MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals& reference_normals,
+                          const ColoredCloud& distorted, const PsnrOptions& options,
+                          const std::string& reference_name, const std::string& distorted_name) {
+  const auto start = std::chrono::steady_clock::now();
+  check_thread_count(options.threads);
+  if (options.peak && !(*options.peak > 0 && *options.peak <= FLT_MAX)) {
+    throw std::invalid_argument("peak: must be a positive float32 number, got " +
+                                short_number(*options.peak));
+  }
+  check_cloud(reference, reference_name, options.colour);
+  check_cloud(distorted, distorted_name, options.colour);
+  const Direction direction = options.direction.value_or(Direction::kSymmetric);
+  ProgressSteps progress(options.progress, 4);
+  MetricResult result;
+  result.metric = "psnr";
+
+  progress.begin("loading");
+  const int dups = static_cast<int>(options.duplicates);
+  const bool weighted = options.tied == TiedNeighbours::kWeightedAverage;
+  ColoredCloud ref_only = reference, dist_only = distorted;
+  if (!options.colour) ref_only.colors.clear(), dist_only.colors.clear();
+  const bool separate = !options.estimate_normals && !reference_normals.positions.empty();
+  const std::vector<Vec3> estimated =
+      options.estimate_normals ? estimated_normals(reference.positions, options.threads)
+                               : std::vector<Vec3>{};
+  const std::vector<Vec3>& own_normals =
+      options.estimate_normals ? estimated : separate ? std::vector<Vec3>{} : reference_normals.normals;
+  const std::string normals_name =
+      separate ? reference_normals.name : reference_name;
+  check_normals(separate ? reference_normals.normals : own_normals,
+                separate ? reference_normals.positions.size() : reference.positions.size(),
+                normals_name);
+  const MpegCloud a = detail::load_mpeg_cloud(ref_only, own_normals, dups, weighted);
+  const MpegCloud b = detail::load_mpeg_cloud(dist_only, {}, dups, weighted);
+  // A normals file is a cloud of its own (pc_error loads it with the same duplicate rule).
+  const std::optional<MpegCloud> file_normals =
+      separate ? std::optional<MpegCloud>(detail::load_mpeg_cloud(
+                     ColoredCloud{reference_normals.positions, {}}, reference_normals.normals, dups,
+                     false))
+               : std::nullopt;
+  if (file_normals && file_normals->size() != a.size()) {
+    throw FormatError(normals_name + ": " + std::to_string(file_normals->size()) +
+                      " points (after duplicates) for the reference's " + std::to_string(a.size()) +
+                      " (--normals needs one normal per reference point)");
+  }
+  if (file_normals && file_normals->points != a.points) {
+    result.warnings.push_back("psnr: " + normals_name + ": its points are not the reference's; "
+                              "as pc_error, its normals are paired with the reference's points "
+                              "by their order after sorting");
+  }
+  ref_only = {};
+  dist_only = {};
+  if (options.inputs_done) options.inputs_done();
+  const MpegCloud& na = file_normals ? *file_normals : a;  // pc_error's cloudNormalsA
+  const bool d2 = !na.normals.empty();
+  if (!d2) {
+    result.warnings.push_back("psnr: " + reference_name +
+                              " has no normals (nx, ny, nz): D2 is left out, as pc_error does "
+                              "(give --normals FILE or --normals estimate)");
+  }
+
+  progress.begin("trees");
+  const MpegTree a_tree(a.points);
+  const MpegTree b_tree(b.points);
+  const std::unique_ptr<MpegTree> na_tree =
+      file_normals && file_normals->points != a.points ? std::make_unique<MpegTree>(na.points)
+                                                       : nullptr;
+
+  nlohmann::json details = nlohmann::json::object();
+  double peak = 0;
+  if (options.peak) {
+    peak = static_cast<float>(*options.peak);  // pc_error's -r is a float
+  } else {
+    const NnDistances nn = nn_distances(a, a_tree, options.threads);
+    if (nn.max <= DBL_MIN) {
+      throw NumericError("psnr: " + reference_name +
+                         ": no two distinct points, so no nearest-neighbour distance gives a "
+                         "peak; give --peak");
+    }
+    peak = nn.max;
+    details["nn_min"] = nn.min;
+    details["nn_max"] = nn.max;
+  }
+  details["peak"] = peak;
+  details["peak_source"] = options.peak ? "given" : "largest nearest-neighbour distance in the reference";
+  details["points_reference"] = a.size();
+  details["points_distorted"] = b.size();
+  details["duplicates_reference"] = a.duplicates;
+  details["duplicates_distorted"] = b.duplicates;
+
+  progress.begin("normals");
+  std::vector<Point3f> b_normals;
+  if (d2) {
+    b_normals = transfer_normals(na, na_tree ? *na_tree : a_tree, b, b_tree,
+                                 options.average_normals, options.threads);
+  }
+
+  progress.begin("errors");
+  PassSettings p;
+  p.colour = options.colour;
+  p.space = options.colour_space;
+  p.weighted = weighted;
+  p.average_normals = options.average_normals;
+  p.keep_points = options.per_element;
+  std::optional<NamedValues> ab, ba;
+  if (direction != Direction::kDistToRef) {
+    const PassOutput o = run_pass(a, b, b_tree, d2 ? &b_normals : nullptr, p, options.threads);
+    ab = pass_values(o, peak, d2, p, options.hausdorff);
+    result.ref_to_dist = direction_result(*ab, o, a, options.per_element);
+  }
+  if (direction != Direction::kRefToDist) {
+    const PassOutput o = run_pass(b, a, a_tree, d2 ? &na.normals : nullptr, p, options.threads);
+    ba = pass_values(o, peak, d2, p, options.hausdorff);
+    result.dist_to_ref = direction_result(*ba, o, b, options.per_element);
+  }
+  result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
+  result.score = *find_value(result.values, "d1_psnr");
+  result.details = std::move(details);
+  result.text_note = text_note(result.values, options, peak, options.peak.has_value());
+  result.provenance.version = kVersion;
+  result.provenance.seconds = seconds_since(start);
+  progress.finish();
+  return result;
+}
+
+// ---- the registry entry -------------------------------------------------------------------------
+
+namespace {
+
+PsnrColourSpace parse_colour_space(const std::string& name) {
+  if (name == "rgb") return PsnrColourSpace::kRgb;
+  if (name == "ycocg") return PsnrColourSpace::kYCoCg;
+  return PsnrColourSpace::kYCbCr;
+}
+
+// --normals FILE: the file's points and normals (a PLY with nx, ny, nz: pc_error -n).
+ReferenceNormals normals_file(const std::string& path) {
+  CloudData c = read_cloud_data(path, CloudFormat::kPly);
+  if (c.normals.empty()) {
+    throw FormatError(path + ": no normals (nx, ny, nz vertex properties), which --normals FILE "
+                      "needs");
+  }
+  return ReferenceNormals{std::move(c.normals), std::move(c.cloud.positions), path};
+}
+
+}  // namespace
+
+MetricSpec psnr_spec() {
+  MetricSpec s;
+  s.name = "psnr";
+  s.title = "PSNR";
+  s.summary =
+      "MPEG pc_error's D1 (point-to-point) and D2 (point-to-plane) PSNR, Hausdorff and colour "
+      "PSNR between two point clouds (pc_error 0.14.2's values; score = symmetric D1 PSNR, dB)";
+  s.higher_is_better = true;
+  s.applies_to = AppliesTo::kClouds;
+  s.reads = Input::Kind::kCloud;
+  s.default_direction = Direction::kSymmetric;
+  s.direction_help =
+      "symmetric: both passes, each value the worse of the two (pc_error's \"Final\"); "
+      "ref-to-dist: the reference's points matched on the distorted cloud (pc_error's A->B, -s); "
+      "dist-to-ref: the distorted cloud's points matched on the reference (B->A)";
+  s.per_element_on_input = true;
+  s.value_names = psnr_value_names();
+  s.options = {
+      {"peak",
+       "Peak p of the geometry PSNRs, 10 log10(3 p^2 / mse) (pc_error -r, e.g. 1023 for 10-bit "
+       "voxels); 0 = pc_error's default: the largest nearest-neighbour distance in the "
+       "reference (echoed in the output)",
+       0.0, {}, 0, 3.4e38},
+      {"color_space",
+       "Colour space of the colour values: ycbcr (BT.709, peak 1; pc_error --mseSpace 1), rgb "
+       "(peak 255; 0), ycocg (YCoCg-R, peaks 255/511/511; 8)",
+       "ycbcr", {"ycbcr", "rgb", "ycocg"}},
+      {"drop_duplicates",
+       "Points of equal coordinates in a cloud: 0 keep, 1 keep the first, 2 merge them into one "
+       "with their mean colour (pc_error --dropdups)",
+       2, {}, 0, 2},
+      {"neighbours",
+       "Colour of several nearest neighbours at the same distance: 1 their mean, 2 their mean "
+       "weighted by the duplicates each merged (pc_error --neighborsProc)",
+       1, {}, 1, 2},
+      {"average_normals",
+       "D2 over every nearest neighbour at the same distance and normals transferred by "
+       "averaging (pc_error --averageNormals=1); false: the first neighbour only",
+       true},
+      {"normals",
+       "Normals of D2: empty = the reference file's nx, ny, nz; FILE = a PLY of the reference's "
+       "points with normals (pc_error -n); estimate = computed as "
+       "shared/tools/add_pca_normals.py does (k = 12, outward from the centroid)",
+       ""},
+      {"no_hausdorff", "Leave out the Hausdorff values (pc_error without -d 1)", false},
+      {"no_color", "Geometry only: leave out the colour values (pc_error without -c 1)", false},
+  };
+  s.run = [](const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
+             const OptionValues& v) {
+    PsnrOptions o;
+    static_cast<RunOptions&>(o) = run;
+    const double peak = v.at("peak").get<double>();
+    if (peak > 0) o.peak = peak;
+    o.colour_space = parse_colour_space(v.at("color_space").get<std::string>());
+    o.duplicates = static_cast<DuplicatePoints>(v.at("drop_duplicates").get<int>());
+    o.tied = static_cast<TiedNeighbours>(v.at("neighbours").get<int>());
+    o.average_normals = v.at("average_normals").get<bool>();
+    o.hausdorff = !v.at("no_hausdorff").get<bool>();
+    o.colour = !v.at("no_color").get<bool>();
+    const std::string normals = v.at("normals").get<std::string>();
+    o.estimate_normals = normals == "estimate";
+    const ReferenceNormals given = normals.empty() || o.estimate_normals
+                                       ? ReferenceNormals{ref.cloud_normals(), {}, {}}
+                                       : normals_file(normals);
+    MetricResult r = compute_psnr(ref.cloud(), given, dist.cloud(), o, ref.name(), dist.name());
+    r.details["normals"] = o.estimate_normals ? "estimated"
+                           : !normals.empty() ? normals
+                           : given.normals.empty() ? "none"
+                                                   : "reference file";
+    return r;
+  };
+  return s;
+}
+
+}  // namespace qm3d::pointcloud

@@ -1,0 +1,76 @@
+// The computation of pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric bd6df59), rule by rule. Internal
+// to psnr.cpp; every rule names where pc_error has it (D: source/pcc_distortion.cpp,
+// P: source/pcc_processing.cpp).
+//
+// Why float and nanoflann: pc_error holds coordinates and normals as float32 and searches with
+// nanoflann 1.2.3 (KDTreeVectorOfVectorsAdaptor, leaf size 10, uint32 indices, distances in
+// double of float differences). Which neighbours tie at the nearest distance - and so the
+// colour and the D2 of every point of a voxelised cloud - depends on that tree's traversal
+// order and on those float distances. Debian's nanoflann 1.4.3 builds and searches the same
+// tree as 1.2.3 (the split rule, the result sets and searchLevel are unchanged between them;
+// shared/docs/NANOFLANN-1.1.7.md §2), so it is used here with pc_error's element and distance
+// types.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "qm3d/common/types.h"
+
+namespace qm3d::pointcloud::detail {
+
+using Point3f = std::array<float, 3>;
+using Colour8 = std::array<std::uint8_t, 3>;
+
+/// A cloud as pc_error holds it after loading (P: PccPointCloud::load): float32 positions sorted
+/// lexicographically (ties by file order), duplicates handled, 8-bit colours, float32 normals.
+struct MpegCloud {
+  std::vector<Point3f> points;
+  std::vector<Colour8> colours;   ///< empty: none
+  std::vector<Point3f> normals;   ///< empty: none
+  std::vector<int> merged;        ///< points a kept point stands for (nbdup; 1 unless averaged
+                                  ///< with neighborsProc 2)
+  std::vector<std::uint32_t> of_input;  ///< input point -> the point here that holds it
+  std::size_t duplicates = 0;     ///< points removed (pc_error's "N points with same coordinates")
+
+  std::size_t size() const { return points.size(); }
+};
+
+/// Loads a cloud the way pc_error does: positions rounded to float32, colours 0..1 -> 0..255,
+/// normals to float32; sorted; runs of equal positions averaged (`duplicates` 2: colour =
+/// truncated mean, `merged` = run length when `weighted`), dropped (1: the first of each run
+/// kept) or kept (0).
+MpegCloud load_mpeg_cloud(const ColoredCloud& cloud, const std::vector<Vec3>& normals,
+                          int duplicates, bool weighted);
+
+/// pc_error's k-d tree over a cloud's points (nanoflann, float elements, double distances).
+class MpegTree {
+ public:
+  explicit MpegTree(const std::vector<Point3f>& points);
+  ~MpegTree();
+  MpegTree(const MpegTree&) = delete;
+  MpegTree& operator=(const MpegTree&) = delete;
+
+  /// The min(k, size) nearest points to `query` in nanoflann's order (distance, then traversal);
+  /// returns how many were written.
+  std::size_t knn(const Point3f& query, std::size_t k, std::uint32_t* indices,
+                  double* distances2) const;
+
+  /// pc_error's expanding query (D: findMetric / scaleNormals): k = first, then k + 5, ...
+  /// while `expand` and the first and the last of the k results are at the same distance and
+  /// k + 5 <= 30. Returns the count found.
+  std::size_t expanding_knn(const Point3f& query, std::size_t first, bool expand,
+                            std::uint32_t* indices, double* distances2) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// At most this many neighbours are searched (D: num_results_max).
+constexpr std::size_t kMaxNeighbours = 30;
+
+}  // namespace qm3d::pointcloud::detail
