@@ -77,9 +77,10 @@ struct ScoredRow {
   std::optional<Input> reference, distorted;
 };
 
-ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std::string& error) {
+ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std::string& error,
+                     const BatchOptions& o) {
   ScoredRow s;
-  s.row = csv_error_row(pair.reference, pair.distorted, metric, error);
+  s.row = csv_error_row(pair.reference, pair.distorted, metric, error, o.value_names);
   s.failed = true;
   return s;
 }
@@ -95,13 +96,13 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     MetricResult result = score(*specs.front(), r, d, request);
     result.provenance.reference = pair.reference;
     result.provenance.distorted = pair.distorted;
-    ScoredRow s{csv_row(result), false, specs.front(), std::nullopt, r, d};
+    ScoredRow s{csv_row(result, {}, o.value_names), false, specs.front(), std::nullopt, r, d};
     if (!o.report_dir.empty()) s.result = std::move(result);
     return s;
   } catch (const std::bad_alloc&) {
-    return failed_row(pair, metric, "out of memory");
+    return failed_row(pair, metric, "out of memory", o);
   } catch (const std::exception& e) {
-    return failed_row(pair, metric, e.what());
+    return failed_row(pair, metric, e.what(), o);
   }
 }
 
@@ -289,7 +290,7 @@ bool score_in_worker(const PairJob& job, WorkerProcess& worker, int threads, con
   for (const std::string& metric : job.metrics) {
     if (written.count(metric) > 0) continue;
     done(csv_error_row(job.pair.reference, job.pair.distorted, metric,
-                       describe_worker_end(w, o.pair_timeout_s)),
+                       describe_worker_end(w, o.pair_timeout_s), o.value_names),
          true);
   }
   return !w.finished || w.end_status.empty();
@@ -368,12 +369,12 @@ std::set<RowKey> prepare_output(LockedResults& out, const BatchOptions& o,
       std::filesystem::resize_file(o.output, complete);
       text.resize(complete);
     }
-    state = read_resume(text, o.output.string(), settings, o.retry_failed);
+    state = read_resume(text, o.output.string(), settings, o.retry_failed, o.value_names);
     if (state.retried > 0) out.replace(state.kept_text);
   } else if (existed) {
     out.truncate();  // --overwrite
   }
-  if (!state.has_header) out.write_line(batch_header());
+  if (!state.has_header) out.write_line(batch_header(o.value_names));
   return state.done;
 }
 
@@ -468,9 +469,28 @@ std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesyst
   }
 }
 
-int run_batch(const BatchOptions& o) {
+namespace {
+
+// BatchOptions::value_names of a list.
+std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
+  std::vector<const MetricSpec*> specs;
+  for (const ListPair& p : pairs) {
+    if (p.metric == "compare") {
+      for (const MetricSpec& s : registry().metrics()) specs.push_back(&s);
+    } else if (const MetricSpec* s = registry().find(p.metric)) {
+      specs.push_back(s);
+    }
+  }
+  return csv_value_names(specs);
+}
+
+}  // namespace
+
+int run_batch(const BatchOptions& options) {
   std::vector<ListPair> pairs =
-      parse_pair_list(read_file_bytes(o.list, kMaxTableBytes), o.list.string());
+      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string());
+  BatchOptions o = options;
+  o.value_names = list_value_names(pairs);
   if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
     return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
   });
@@ -545,7 +565,10 @@ void run_worker_job(const BatchOptions& o, const std::string& line) {
 
 }  // namespace
 
-int run_batch_worker(const BatchOptions& o) {
+int run_batch_worker(const BatchOptions& options) {
+  BatchOptions o = options;
+  o.value_names = list_value_names(
+      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string()));
   // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   std::string line;

@@ -40,6 +40,10 @@ struct BatchOptions {
   /// end. The workers run `program` with the hidden --batch-worker and `command_line`.
   bool isolate = true;
   double pair_timeout_s = 0;  ///< kill a worker after this long (isolate only); 0 = no limit
+  /// The named-value columns of the results (csv_header): those of every metric the whole list
+  /// names (compare: all metrics), so that shards and resumed runs share one header. Set by
+  /// run_batch / run_batch_worker from the list.
+  std::vector<std::string> value_names;
   std::string program;        ///< argv[0]
   std::vector<std::string> command_line;  ///< argv[1..]: this batch's own arguments
 };

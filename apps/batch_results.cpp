@@ -91,12 +91,19 @@ bool row_failed(const std::vector<std::string>& fields) {
 }
 
 // The header check of read_resume.
-void check_header(const std::string& line, const std::string& file) {
-  if (line == batch_header()) return;
+void check_header(const std::string& line, const std::string& file,
+                  const std::vector<std::string>& value_names) {
+  if (line == batch_header(value_names)) return;
   if (line == csv_header()) {
     throw InputError(file +
                      ": written by an older qm3d (no settings column), so its settings cannot "
                      "be checked: finish it with that version, or start again with --overwrite");
+  }
+  if (line.rfind(csv_header(), 0) == 0) {
+    throw InputError(file +
+                     ": its columns are not this batch's (the list's metrics report other "
+                     "named values, e.g. psnr was added or removed): resume with the same list, "
+                     "or write to another -o");
   }
   throw InputError(file +
                    ": not a qm3d batch results file (its first line is not the header qm3d "
@@ -105,7 +112,9 @@ void check_header(const std::string& line, const std::string& file) {
 
 }  // namespace
 
-std::string batch_header() { return csv_header() + ",settings"; }
+std::string batch_header(const std::vector<std::string>& value_names) {
+  return csv_header(value_names) + ",settings";
+}
 
 std::string batch_settings(const ScoreRequest& request) {
   std::vector<std::string> items;
@@ -202,15 +211,16 @@ void LockedResults::write_line(const std::string& row) {
 }
 
 ResumeState read_resume(const std::string& text, const std::string& file,
-                        const std::string& settings, bool retry_failed) {
+                        const std::string& settings, bool retry_failed,
+                        const std::vector<std::string>& value_names) {
   ResumeState state;
   std::istringstream in(text);
   std::string line;
-  const std::size_t settings_column = csv_split(batch_header()).size() - 1;
+  const std::size_t settings_column = csv_split(batch_header(value_names)).size() - 1;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (!state.has_header) {
-      check_header(line, file);
+      check_header(line, file, value_names);
       state.has_header = true;
       state.kept_text += line + "\n";
       continue;

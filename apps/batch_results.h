@@ -15,7 +15,7 @@
 namespace qm3d::app {
 
 /// csv_header() and ",settings".
-std::string batch_header();
+std::string batch_header(const std::vector<std::string>& value_names = {});
 
 /// The options a batch scores with, as one field: "key=value" items separated by spaces and
 /// sorted (metric options as given, direction, model=METRIC:w1/.../w8), or "defaults". The
@@ -69,7 +69,8 @@ struct ResumeState {
 /// InputError when it is not a qm3d batch results file (its first line is not batch_header())
 /// or a row was scored with other settings than `settings` (naming what differs).
 ResumeState read_resume(const std::string& text, const std::string& file,
-                        const std::string& settings, bool retry_failed);
+                        const std::string& settings, bool retry_failed,
+                        const std::vector<std::string>& value_names = {});
 
 /// The number of rows of a results text whose status is not "ok".
 std::size_t count_error_rows(const std::string& text);

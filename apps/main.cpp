@@ -102,8 +102,13 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
   if (o.json) {
     out << (as_compare ? compare_json(results) : to_json(results.front())).dump(2) << "\n";
   } else if (o.csv) {
-    out << csv_header() << "\n";
-    for (const auto& r : results) out << csv_row(r) << "\n";
+    std::vector<const MetricSpec*> specs;
+    for (const auto& r : results) {
+      if (const MetricSpec* s = registry().find(r.metric)) specs.push_back(s);
+    }
+    const std::vector<std::string> values = csv_value_names(specs);
+    out << csv_header(values) << "\n";
+    for (const auto& r : results) out << csv_row(r, {}, values) << "\n";
   } else {
     for (const auto& r : results) out << text_line(r) << "\n";
   }

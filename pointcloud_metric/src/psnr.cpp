@@ -422,7 +422,7 @@ void check_cloud(const ColoredCloud& c, const std::string& name, bool colour) {
   }
   if (colour && c.colors.empty()) {
     throw FormatError(name + ": no vertex colours (psnr's colour values need one colour per point; "
-                      "give --no-colour for geometry only)");
+                      "give --no-color for geometry only)");
   }
   if (colour && c.colors.size() != c.positions.size()) {
     throw FormatError(name + ": " + std::to_string(c.positions.size()) + " points but " +

@@ -144,16 +144,23 @@ class Direction:
 
     Attributes:
         score: the direction's pooled score.
-        features: dict of the pooled features ("f1".."f8" for CMDM/MSDM2, "F1".."F8" for PCQM).
-        box_size: the bounding-box size that scales the metric's radii, in the object's units.
+        features: dict of the pooled features ("f1".."f8" for CMDM/MSDM2, "F1".."F8" for PCQM)
+            or of the metric's named values (psnr: "d1_mse", "d1_psnr", ...; an infinite PSNR
+            is float("inf")).
+        box_size: the bounding-box size that scales the metric's radii, in the object's units
+            (None for psnr).
         per_element: numpy float64 array, the local distortion of each vertex / point of the
             iterated object (its input order), or None unless ``per_element=True`` was asked.
     """
 
     def __init__(self, d, names):
         self.score = d.score
-        self.features = dict(zip(names, d.feature_values))
-        self.box_size = d.box_size
+        if d.values:
+            self.features = dict(d.values)
+            self.box_size = None
+        else:
+            self.features = dict(zip(names, d.feature_values))
+            self.box_size = d.box_size
         self.per_element = d.per_element
 
     def __repr__(self):
@@ -168,8 +175,13 @@ class Result:
         score: the requested direction's score, or the mean of both (symmetric).
         dist_to_ref / ref_to_dist: a Direction, or None when not computed.
         directions: dict of the computed directions by name.
-        features: the features of the single computed direction (None when both were computed).
+        features: the features of the single computed direction (None when both were computed);
+            for a metric of named values (psnr) the result's own: the symmetric values (each
+            the worse direction's, as pc_error's "Final") or the single direction's.
         box_size, per_element: likewise, of the single computed direction.
+        details: dict of the metric's further values (psnr: peak, peak_source, nn_min /
+            nn_max, points_reference, points_distorted, duplicates_reference,
+            duplicates_distorted, normals), as in the JSON.
         warnings: list of str (repairs made to the inputs, caveats), as the tool prints them.
         seconds: wall time of the computation.
     """
@@ -184,19 +196,23 @@ class Result:
         self.directions = {k: v for k, v in (("dist_to_ref", self.dist_to_ref),
                                              ("ref_to_dist", self.ref_to_dist)) if v is not None}
         single = next(iter(self.directions.values())) if len(self.directions) == 1 else None
-        self.features = single.features if single else None
+        self.features = dict(r.values) if r.values else single.features if single else None
         self.box_size = single.box_size if single else None
         self.per_element = single.per_element if single else None
         self.warnings = list(r.warnings)
         self.seconds = r.seconds
+        self.details = _json.loads(r.details_json)
 
     def to_dict(self):
         """The object ``qm3d <metric> --json`` writes for this result."""
         return _json.loads(self._r.to_json())
 
-    def csv_row(self):
-        """The row ``qm3d <metric> --csv`` (and ``batch``) writes for this result."""
-        return self._r.csv_row()
+    def csv_row(self, value_names=None):
+        """The row ``qm3d <metric> --csv`` (and ``batch``) writes for this result, under
+        ``csv_header(value_names)`` (default: this metric's named-value columns)."""
+        if value_names is None:
+            value_names = _SPECS[self.metric]["value_names"] if self.metric in _SPECS else []
+        return self._r.csv_row(list(value_names))
 
     def __repr__(self):
         return f"Result(metric={self.metric!r}, score={self.score!r})"

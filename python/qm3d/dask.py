@@ -21,8 +21,9 @@ import qm3d
 
 __all__ = ["score_pairs", "COLUMNS"]
 
-COLUMNS = qm3d._qm3d.csv_header().split(",")
-"""The columns, as in ``qm3d batch``'s CSV."""
+_VALUE_NAMES = qm3d._qm3d.csv_value_names()
+COLUMNS = qm3d._qm3d.csv_header(_VALUE_NAMES).split(",")
+"""The columns, as in ``qm3d batch``'s CSV (with the named-value columns of every metric)."""
 
 _TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error"}
 
@@ -36,7 +37,7 @@ def _error_row(reference, distorted, metric, message):
 
 def _row(result, reference, distorted):
     import csv
-    fields = next(csv.reader([result.csv_row()]))
+    fields = next(csv.reader([result.csv_row(_VALUE_NAMES)]))
     row = {}
     for name, value in zip(COLUMNS, fields):
         row[name] = value if name in _TEXT_COLUMNS else (float(value) if value else math.nan)

@@ -174,6 +174,7 @@ py::dict spec_dict(const MetricSpec& s) {
   d["direction_help"] = s.direction_help;
   d["takes_model"] = s.takes_model;
   d["model_metric"] = s.model_name();
+  d["value_names"] = s.value_names;
   py::list options;
   for (const OptionSpec& o : s.options) {
     py::dict od;
@@ -329,7 +330,8 @@ PYBIND11_MODULE(_qm3d, m) {
       .def_property_readonly("per_element", [](const DirectionResult& d) -> py::object {
         if (d.per_element.empty()) return py::none();
         return as_numpy(d.per_element);
-      });
+      })
+      .def_readonly("values", &DirectionResult::values);
 
   py::class_<MetricResult>(m, "MetricResult")
       .def_readonly("metric", &MetricResult::metric)
@@ -340,10 +342,22 @@ PYBIND11_MODULE(_qm3d, m) {
       .def_readonly("warnings", &MetricResult::warnings)
       .def_property_readonly("seconds",
                              [](const MetricResult& r) { return r.provenance.seconds; })
+      .def_readonly("values", &MetricResult::values)
+      .def_property_readonly("details_json", [](const MetricResult& r) { return r.details.dump(); })
       .def("to_json", [](const MetricResult& r) { return to_json(r).dump(); })
-      .def("csv_row", [](const MetricResult& r) { return csv_row(r); });
+      .def(
+          "csv_row",
+          [](const MetricResult& r, const std::vector<std::string>& value_names) {
+            return csv_row(r, {}, value_names);
+          },
+          py::arg("value_names") = std::vector<std::string>{});
 
-  m.def("csv_header", &csv_header);
+  m.def("csv_header", &csv_header, py::arg("value_names") = std::vector<std::string>{});
+  m.def("csv_value_names", [] {
+    std::vector<const MetricSpec*> all;
+    for (const MetricSpec& s : registry().metrics()) all.push_back(&s);
+    return csv_value_names(all);
+  });
 
   m.def(
       "run",
