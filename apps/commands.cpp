@@ -74,9 +74,9 @@ void write_map(const std::filesystem::path& map, const MetricSpec& spec, const M
   const Input& iterated = on_distorted ? distorted : reference;
   if (spec.reads == Input::Kind::kMesh) {
     const ColoredMesh& m = iterated.mesh().mesh;
-    write_distortion_map(map, m.positions, m.triangles, d.per_element);
+    write_distortion_map(map, m.positions, m.triangles, d.per_element, d.per_element_values);
   } else {
-    write_distortion_map(map, iterated.cloud().positions, {}, d.per_element);
+    write_distortion_map(map, iterated.cloud().positions, {}, d.per_element, d.per_element_values);
   }
 }
 

@@ -22,7 +22,8 @@ std::array<std::uint8_t, 3> heat_color(double t) {
 }
 
 void write_distortion_map(const std::filesystem::path& path, const std::vector<Vec3>& positions,
-                          const std::vector<Triangle>& triangles, const std::vector<double>& values) {
+                          const std::vector<Triangle>& triangles, const std::vector<double>& values,
+                          const std::vector<std::pair<std::string, std::vector<double>>>& more) {
   ply::WriteData d;
   d.positions = positions;
   d.double_positions = true;
@@ -31,6 +32,7 @@ void write_distortion_map(const std::filesystem::path& path, const std::vector<V
   // field (CloudCompare loads every extra float property; "scalar_" is its own prefix).
   d.scalar_names = {"distortion", "quality", "scalar_distortion"};
   d.scalars.assign(values.begin(), values.end());
+  for (const auto& [name, v] : more) d.extra_scalars.emplace_back("scalar_" + name, std::vector<float>(v.begin(), v.end()));
   double lo = 0, hi = 0;
   if (!values.empty()) {
     const auto [mn, mx] = std::minmax_element(values.begin(), values.end());

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "qm3d/common/types.h"
@@ -13,7 +15,8 @@ namespace qm3d::app {
 /// a heat-map colour (blue = lowest value of the object, red = highest), plus the triangles (empty
 /// for a point cloud). Written atomically: never a partial file.
 void write_distortion_map(const std::filesystem::path& path, const std::vector<Vec3>& positions,
-                          const std::vector<Triangle>& triangles, const std::vector<double>& values);
+                          const std::vector<Triangle>& triangles, const std::vector<double>& values,
+                          const std::vector<std::pair<std::string, std::vector<double>>>& more = {});
 
 /// Heat-map colour of t in [0, 1]: blue, cyan, green, yellow, red.
 std::array<std::uint8_t, 3> heat_color(double t);

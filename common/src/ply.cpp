@@ -598,6 +598,11 @@ void write(const std::filesystem::path& path, const WriteData& d) {
   if (!d.scalar_names.empty() && d.scalars.size() != d.positions.size()) {
     throw std::invalid_argument("ply::write: scalar count differs from vertex count");
   }
+  for (const auto& [name, values] : d.extra_scalars) {
+    if (values.size() != d.positions.size()) {
+      throw std::invalid_argument("ply::write: " + name + " count differs from vertex count");
+    }
+  }
   if (d.format == Format::kBinaryBigEndian) {
     throw std::invalid_argument("ply::write: big-endian output is not supported");
   }
@@ -611,6 +616,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
     out << "property " << ptype << " x\nproperty " << ptype << " y\nproperty " << ptype << " z\n";
     if (!d.colors.empty()) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     for (const std::string& name : d.scalar_names) out << "property float " << name << "\n";
+    for (const auto& extra : d.extra_scalars) out << "property float " << extra.first << "\n";
     if (!d.triangles.empty()) {
       out << "element face " << d.triangles.size() << "\nproperty list uchar int vertex_indices\n";
     }
@@ -625,6 +631,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
               << int(d.colors[i][2]);
         }
         for (std::size_t k = 0; k < d.scalar_names.size(); ++k) out << ' ' << d.scalars[i];
+        for (const auto& extra : d.extra_scalars) out << ' ' << extra.second[i];
         out << '\n';
         continue;
       }
@@ -636,6 +643,7 @@ void write(const std::filesystem::path& path, const WriteData& d) {
       }
       if (!d.colors.empty()) out.write(reinterpret_cast<const char*>(d.colors[i].data()), 3);
       for (std::size_t k = 0; k < d.scalar_names.size(); ++k) put<float>(out, d.scalars[i]);
+      for (const auto& extra : d.extra_scalars) put<float>(out, extra.second[i]);
     }
     for (const Triangle& t : d.triangles) {
       if (ascii) {

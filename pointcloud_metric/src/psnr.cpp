@@ -242,14 +242,20 @@ struct PassSums {
   }
 };
 
+/// One point's errors: D1, D2, and the colour channels' (in the colour space).
+struct PointErrors {
+  double d1 = 0, d2 = 0;
+  std::array<double, 3> colour{0, 0, 0};
+};
+
 struct PassOutput {
   PassSums sums;
   std::size_t points = 0;
-  std::vector<double> d1;  // per point of A (keep_points)
+  std::vector<PointErrors> per_point;  // per point of A (keep_points)
 };
 
-// One point of A against B: adds its errors to `s`; returns its D1 error.
-double point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
+// One point of A against B: adds its errors to `s` and returns them.
+PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
                     const std::vector<Point3f>* normals, const PassSettings& p, PassSums& s) {
   std::uint32_t idx[kMaxNeighbours];
   double d2[kMaxNeighbours];
@@ -264,7 +270,9 @@ double point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const
   const double e0 = double(q[0]) - double(nearest[0]);
   const double e1 = double(q[1]) - double(nearest[1]);
   const double e2 = double(q[2]) - double(nearest[2]);
+  PointErrors errors;
   const double d1 = e0 * e0 + e1 * e1 + e2 * e2;
+  errors.d1 = d1;
   s.d1_sum += d1;
   s.d1_max = std::max(s.d1_max, d1);
   if (normals != nullptr) {
@@ -282,6 +290,7 @@ double point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const
       d2_point = e0 * n[0] + e1 * n[1] + e2 * n[2];
       d2_point *= d2_point;
     }
+    errors.d2 = d2_point;
     s.d2_sum += d2_point;
     s.d2_max = std::max(s.d2_max, d2_point);
   }
@@ -301,19 +310,20 @@ double point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const
     const std::array<float, 3> out = convert(p.space, matched);
     for (int c = 0; c < 3; ++c) {
       const float diff = in[c] - out[c];
-      s.colour_sum[c] += static_cast<float>(diff * diff);
+      errors.colour[c] = static_cast<float>(diff * diff);
+      s.colour_sum[c] += errors.colour[c];
       const int rgb = int(a.colours[i][c]) - int(matched[c]);
       s.rgb_max[c] = std::max(s.rgb_max[c], static_cast<double>(rgb * rgb));
     }
   }
-  return d1;
+  return errors;
 }
 
 PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tree,
                     const std::vector<Point3f>* normals, const PassSettings& p, int threads) {
   PassOutput out;
   out.points = a.size();
-  if (p.keep_points) out.d1.resize(a.size());
+  if (p.keep_points) out.per_point.resize(a.size());
   const long chunks = static_cast<long>((a.size() + kChunk - 1) / kChunk);
   std::vector<PassSums> partial(static_cast<std::size_t>(chunks));
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(threads))
@@ -322,8 +332,8 @@ PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tr
     const std::size_t last = std::min(a.size(), first + kChunk);
     PassSums s;
     for (std::size_t i = first; i < last; ++i) {
-      const double d1 = point_errors(a, i, b, b_tree, normals, p, s);
-      if (p.keep_points) out.d1[i] = d1;
+      const PointErrors e = point_errors(a, i, b, b_tree, normals, p, s);
+      if (p.keep_points) out.per_point[i] = e;
     }
     partial[c] = s;
   }
@@ -393,17 +403,27 @@ NamedValues symmetric_values(const NamedValues& a, const NamedValues& b) {
   return out;
 }
 
+// per_element: each input point's D1 error (a merged duplicate takes its run's); per_element_values:
+// its D2 error (with normals) and colour errors (with colour).
 DirectionResult direction_result(const NamedValues& values, const PassOutput& o,
-                                 const MpegCloud& iterated, bool per_element) {
+                                 const MpegCloud& iterated, bool per_element, bool d2,
+                                 bool colour) {
   DirectionResult d;
   d.score = *find_value(values, "d1_psnr");
   d.features.fill(0.0);
   d.values = values;
-  if (per_element) {  // on the input's points: a merged duplicate takes its run's value
-    d.per_element.resize(iterated.of_input.size());
-    for (std::size_t k = 0; k < iterated.of_input.size(); ++k) {
-      d.per_element[k] = o.d1[iterated.of_input[k]];
-    }
+  if (!per_element) return d;
+  const std::size_t n = iterated.of_input.size();
+  const auto on_input = [&](auto&& pick) {
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = pick(o.per_point[iterated.of_input[k]]);
+    return v;
+  };
+  d.per_element = on_input([](const PointErrors& e) { return e.d1; });
+  if (d2) d.per_element_values.emplace_back("d2", on_input([](const PointErrors& e) { return e.d2; }));
+  for (int c = 0; colour && c < 3; ++c) {
+    d.per_element_values.emplace_back("c" + std::to_string(c),
+                                      on_input([c](const PointErrors& e) { return e.colour[c]; }));
   }
   return d;
 }
@@ -580,12 +600,12 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   if (direction != Direction::kDistToRef) {
     const PassOutput o = run_pass(a, b, b_tree, d2 ? &b_normals : nullptr, p, options.threads);
     ab = pass_values(o, peak, d2, p, options.hausdorff);
-    result.ref_to_dist = direction_result(*ab, o, a, options.per_element);
+    result.ref_to_dist = direction_result(*ab, o, a, options.per_element, d2, options.colour);
   }
   if (direction != Direction::kRefToDist) {
     const PassOutput o = run_pass(b, a, a_tree, d2 ? &na.normals : nullptr, p, options.threads);
     ba = pass_values(o, peak, d2, p, options.hausdorff);
-    result.dist_to_ref = direction_result(*ba, o, b, options.per_element);
+    result.dist_to_ref = direction_result(*ba, o, b, options.per_element, d2, options.colour);
   }
   result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
   result.score = *find_value(result.values, "d1_psnr");

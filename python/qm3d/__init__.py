@@ -150,7 +150,10 @@ class Direction:
         box_size: the bounding-box size that scales the metric's radii, in the object's units
             (None for psnr).
         per_element: numpy float64 array, the local distortion of each vertex / point of the
-            iterated object (its input order), or None unless ``per_element=True`` was asked.
+            iterated object (its input order), or None unless ``per_element=True`` was asked
+            (psnr: each point's D1 error, its squared distance).
+        per_element_values: dict of further per-element arrays (psnr: "d2" and "c0".."c2",
+            each point's D2 and squared colour errors), empty unless ``per_element=True``.
     """
 
     def __init__(self, d, names):
@@ -162,6 +165,7 @@ class Direction:
             self.features = dict(zip(names, d.feature_values))
             self.box_size = d.box_size
         self.per_element = d.per_element
+        self.per_element_values = dict(d.per_element_values)
 
     def __repr__(self):
         return f"Direction(score={self.score!r})"

@@ -331,7 +331,12 @@ PYBIND11_MODULE(_qm3d, m) {
         if (d.per_element.empty()) return py::none();
         return as_numpy(d.per_element);
       })
-      .def_readonly("values", &DirectionResult::values);
+      .def_readonly("values", &DirectionResult::values)
+      .def_property_readonly("per_element_values", [](const DirectionResult& d) {
+        py::dict out;
+        for (const auto& [name, v] : d.per_element_values) out[py::str(name)] = as_numpy(v);
+        return out;
+      });
 
   py::class_<MetricResult>(m, "MetricResult")
       .def_readonly("metric", &MetricResult::metric)

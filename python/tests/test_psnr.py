@@ -96,6 +96,10 @@ def test_per_element_is_the_d1_error_of_each_input_point():
     assert np.mean(d) == pytest.approx(r.ref_to_dist.features["d1_mse"], rel=1e-12)
     assert np.max(d) == pytest.approx(r.ref_to_dist.features["d1_hausdorff"], rel=0)
     assert r.box_size is None and r.ref_to_dist.box_size is None
+    extra = r.ref_to_dist.per_element_values
+    assert set(extra) == {"d2", "c0", "c1", "c2"}
+    assert np.mean(extra["c0"]) == pytest.approx(r.ref_to_dist.features["c0_mse"], rel=1e-12)
+    assert np.mean(extra["d2"]) == pytest.approx(r.ref_to_dist.features["d2_mse"], rel=1e-12)
 
 
 def test_identical_clouds_are_infinite_and_json_null():

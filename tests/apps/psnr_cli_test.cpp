@@ -126,6 +126,23 @@ TEST_F(PsnrCli, BatchWritesTheValuesOfTheListsMetrics) {
   EXPECT_EQ(again.code, 0) << again.err;
 }
 
+TEST_F(PsnrCli, MapHoldsEachPointsD1AndColourErrors) {
+  const auto run = qm3d("psnr reference/mpeg/vox1_ref_n.ply reference/voxel/vox1_requant8.ply "
+                        "--peak 1023 --direction ref-to-dist -q --json --map " + path("map.ply"));
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  const std::string bytes = test::slurp(path("map.ply"));
+  for (const char* p : {"property float quality", "property float scalar_distortion",
+                        "property float scalar_d2", "property float scalar_c0",
+                        "property float scalar_c2"}) {
+    EXPECT_NE(bytes.find(p), std::string::npos) << p;
+  }
+  const ply::Content map = ply::parse(bytes, "map.ply");
+  EXPECT_EQ(map.positions.size(), 56320u);  // the reference's points, in its order
+  EXPECT_NE(bytes.find("element vertex 56320"), std::string::npos);
+  (void)j;
+}
+
 TEST_F(PsnrCli, BadInputIsOneLineNamingTheFile) {
   ply::WriteData w;
   w.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};

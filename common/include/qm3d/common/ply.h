@@ -101,6 +101,8 @@ struct WriteData {
   /// CloudCompare's "scalar_distortion"); empty = none.
   std::vector<std::string> scalar_names;
   std::vector<float> scalars;  ///< one per vertex when scalar_names is not empty
+  /// Further float vertex properties, each with its own values (one per vertex), after those.
+  std::vector<std::pair<std::string, std::vector<float>>> extra_scalars;
   std::vector<Triangle> triangles;
   Format format = Format::kBinaryLittleEndian;
   bool double_positions = false;  ///< write x, y, z as double instead of float

@@ -85,6 +85,9 @@ struct DirectionResult {
   /// The metric's named values of this direction (MetricSpec::value_names); empty for the
   /// metrics whose features are f1..f8.
   NamedValues values;
+  /// Further per-element values by name, each like per_element (psnr: "c0".."c2", each point's
+  /// squared colour error per channel); maps write them as scalar_NAME.
+  std::vector<std::pair<std::string, std::vector<double>>> per_element_values;
 };
 
 /// Where a result comes from: enough to reproduce it.
