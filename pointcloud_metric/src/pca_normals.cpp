@@ -137,7 +137,7 @@ void lasr_right(Mat3& z, int first, int count, const double* c, const double* s,
 }
 
 // One block [l, lend] of dsteqr's QL iteration (|d[lend]| >= |d[l]|). Returns false when the
-// iteration budget (30 n) ran out. work_c / work_s: the saved rotations (dsteqr's WORK).
+// iteration budget (30 n) ran out.
 bool ql_block(std::array<double, 3>& d, std::array<double, 2>& e, Mat3& z, int l, int lend,
               int& jtot) {
   const double eps2 = kEps * kEps;

@@ -178,5 +178,17 @@ TEST(SymmetricEigen3, GenericMatrixIsAnOrthonormalEigenbasis) {
   EXPECT_LT(eigen.values[1], eigen.values[2]);
 }
 
+// vox1_ref.ply's point 46: a neighbourhood on two axis-aligned voxel planes whose normal's y
+// component is 0 in exact arithmetic. numpy.linalg.eigh (LAPACK dsyevd) returns -2^-53 there,
+// which float32 keeps (flipped, vox1_ref_n.ply stores +1.110223e-16); these are its bits.
+TEST(SymmetricEigen3, ReproducesLapacksRoundingNoise) {
+  const std::array<Vec3, 3> covariance{
+      {{0x1p-2, 0, -0x1p-2}, {0, 0x1.5555555555555p-1, 0}, {-0x1p-2, 0, 0x1p-1}}};
+  const SymmetricEigen3 eigen = symmetric_eigenvectors_3x3(covariance);
+  EXPECT_EQ(eigen.values, (std::array<double, 3>{0x1.8722191a02d60p-4, 0x1.4f1bbcdcbfa53p-1,
+                                                 0x1.5555555555554p-1}));
+  EXPECT_EQ(eigen.vectors[0], (Vec3{0x1.b38880b4603e4p-1, -0x1p-53, 0x1.0d2ca0da1530dp-1}));
+}
+
 }  // namespace
 }  // namespace qm3d::pointcloud::detail
