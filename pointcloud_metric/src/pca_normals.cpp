@@ -402,14 +402,20 @@ void apply_reflector(Mat3& z, double tau, double v1) {
 using Neighbourhood = std::array<std::uint32_t, kPcaNeighbours>;
 
 // The 12 nearest points of `query` (itself included) in the tool's order: by squared distance,
-// then by input index. The tree's kNN gives the 12th distance; every point at most that far is
-// then gathered (ties at the boundary included) and ordered, as the tool's partition + lexsort.
+// then by input index. The tree's kNN keeps the first of equal distances it meets, so when the
+// 13th nearest ties the 12th, every point at most the 12th distance away is gathered (ties at
+// the boundary included); either set is then ordered as the tool's partition + lexsort.
 Neighbourhood nearest_points(const KdTree& tree, const std::vector<Vec3>& positions,
                              const Vec3& query, std::vector<Neighbour>& scratch) {
-  tree.knn_search(query, kPcaNeighbours, scratch);
-  const double kth_distance2 = scratch.back().distance2;
-  tree.radius_search(query, std::nextafter(kth_distance2, std::numeric_limits<double>::infinity()),
-                     scratch);
+  constexpr std::size_t k = kPcaNeighbours;
+  tree.knn_search(query, k + 1, scratch);
+  if (scratch.size() > k && scratch[k].distance2 > scratch[k - 1].distance2) {
+    scratch.resize(k);
+  } else {
+    const double kth_distance2 = scratch[k - 1].distance2;
+    tree.radius_search(
+        query, std::nextafter(kth_distance2, std::numeric_limits<double>::infinity()), scratch);
+  }
   for (Neighbour& n : scratch) {
     n.index = tree.input_index()[n.index];
     n.distance2 = squared_distance(query, positions[n.index]);
