@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|all]      (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|all]      (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -11,6 +11,14 @@
 #            as 2 threads
 #   batch    `batch --jobs 2` over 20 copies of the blob6 pair and 20 of the 200k-point pair: wall
 #            <= 1.1 x (sum of the single pairs' --threads 1 CPU times) / 2
+#   psnr     `psnr --threads 2` (MPEG pc_error's D1/D2/colour PSNR) on a 1M-point sphere pair (D1 +
+#            colour: positions with Gaussian noise, colours with noise; no normals, so no D2) and on
+#            the voxelised vox1 pair with the reference's normals (D1 + D2 + colour). When
+#            QM3D_PC_ERROR names a pc_error 0.14.2 binary (built outside this repository), pc_error
+#            runs in the same loop, interleaved with qm3d, with the CTC options and
+#            --nbThreads=2; targets: qm3d's wall <= 1/3 of pc_error's, peak RSS <= 1.5 x
+#            (reported, not enforced); qm3d's symmetric D1 PSNR must equal pc_error's
+#            "mseF,PSNR (p2point)" (1e-8 relative, inf = inf).
 #
 # Each case runs QM3D_BENCH_RUNS times (default 5) and reports the median and the spread
 # (min..max) of wall time, CPU time (user + system) and peak RSS, as /usr/bin/time measures them
@@ -18,9 +26,11 @@
 # ../shared/data/reference/scale_reference.tsv has the pair, it is compared with that score.
 # Environment: QM3D_BIN (the tool; default build/apps/qm3d), QM3D_BENCH_DIR (inputs, generated
 # once with ../shared/tools/*.py, which need python3-numpy; default /tmp/qm3d-bench),
-# QM3D_BENCH_THREADS (threads of the main cases; default all cores), QM3D_BENCH_RUNS.
-# The exit status is 1 when a score differs between runs or from its reference, or a `threads` /
-# `batch` check fails (speed and memory targets are reported, not enforced).
+# QM3D_BENCH_THREADS (threads of the main cases; default all cores), QM3D_BENCH_RUNS,
+# QM3D_PC_ERROR (psnr: the pc_error binary to compare with; unset = qm3d alone).
+# The exit status is 1 when a score differs between runs or from its reference, a `threads` /
+# `batch` check fails, or psnr's D1 PSNR differs from pc_error's (speed and memory targets are
+# reported, not enforced).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -198,5 +208,87 @@ if [ "$WHICH" = all ] || [ "$WHICH" = batch ]; then
   echo
   check "$failed == 0" "batch: $failed failed rows"
   check "$(median "$TMP/batch_time" 0) <= $bound" "batch wall $(median "$TMP/batch_time" 0) s <= 1.1 x 20 x ($cpu_mesh + $cpu_cloud) / 2 = $bound s"
+fi
+if [ "$WHICH" = all ] || [ "$WHICH" = psnr ]; then
+  # Inputs: the 1M-point sphere of gen_big_cloud.py with its cnoise10 colours and Gaussian
+  # position noise (sigma 0.002 = 0.001 x the bounding box, as gen_clouds.py's gnoise0.001), and
+  # the shared vox1 pair whose reference carries add_pca_normals.py's normals.
+  gen_cloud 1000000 1000k
+  noisy="$DATA/sphere_1000k_gnoise0.001_cnoise10_bin.ply"
+  [ -f "$noisy" ] || $PY - "$DATA/sphere_1000k_ref_bin.ply" "$DATA/sphere_1000k_cnoise10_bin.ply" "$noisy" <<'EOF'
+import sys
+import numpy as np
+def read(path):
+    data = open(path, 'rb').read()
+    end = data.index(b'end_header\n') + len(b'end_header\n')
+    dt = np.dtype([('x', '<f4'), ('y', '<f4'), ('z', '<f4'), ('red', 'u1'), ('green', 'u1'), ('blue', 'u1')])
+    assert (len(data) - end) % dt.itemsize == 0 and b'property uchar blue\nend_header' in data[:end], path
+    return data[:end], np.frombuffer(data[end:], dtype=dt).copy()
+header, cloud = read(sys.argv[1])
+_, coloured = read(sys.argv[2])
+rng = np.random.default_rng(25)
+for c in 'xyz':
+    cloud[c] = (cloud[c].astype(np.float64) + rng.normal(scale=0.002, size=len(cloud))).astype(np.float32)
+for c in ('red', 'green', 'blue'):
+    cloud[c] = coloured[c]
+open(sys.argv[3], 'wb').write(header + cloud.tobytes())
+EOF
+  PC_ERROR="${QM3D_PC_ERROR:-}"
+  [ -z "$PC_ERROR" ] || [ -x "$PC_ERROR" ] || { echo "QM3D_PC_ERROR=$PC_ERROR is not executable" >&2; exit 1; }
+  json_d1() {  # qm3d's --json on stdout -> its symmetric D1 PSNR (null = inf)
+    $PY -c "import json,sys; v=json.load(open(sys.argv[1]))['features']['d1_psnr']; print('inf' if v is None else repr(v))" "$1" 2>/dev/null || echo error
+  }
+  pc_error_d1() {  # pc_error's stdout -> its "3. Final (symmetric)" D1 PSNR as printed
+    awk '/mseF,PSNR \(p2point\):/ {v = $NF} END {print v == "" ? "error" : v}' "$1"
+  }
+  same_psnr() {  # a b -> exit 0 when equal within 1e-8 relative (pc_error prints 9 digits), inf = inf
+    $PY -c "import sys,math; a,b=(float(x) for x in sys.argv[1:]); sys.exit(0 if a==b or (math.isfinite(a) and abs(a-b)<=1e-8*abs(b)) else 1)" "$1" "$2" 2>/dev/null
+  }
+  echo
+  echo "| case | tool | threads | wall | CPU | peak RSS | D1 PSNR (symmetric, dB) | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  summary=()
+  REFDATA="$ROOT/../shared/data/reference"
+  for c in "psnr sphere 1M points (D1 + colour)|1|$DATA/sphere_1000k_ref_bin.ply|$noisy" \
+           "psnr vox1 56k points, normals (D1 + D2 + colour)|1023|$REFDATA/mpeg/vox1_ref_n.ply|$REFDATA/voxel/vox1_gnoise1.ply"; do
+    IFS='|' read -r label peak ref dist <<<"$c"
+    for f in tq tp dq dp; do : > "$TMP/$f"; done
+    # qm3d and pc_error alternate, so that a slow spell of the machine weighs on both alike.
+    for _ in $(seq "$RUNS"); do
+      measure_once "$TMP/tq" "$QM3D" psnr "$ref" "$dist" --peak "$peak" --threads 2 --quiet --json
+      json_d1 "$TMP/out" >> "$TMP/dq"
+      if [ -n "$PC_ERROR" ]; then
+        measure_once "$TMP/tp" "$PC_ERROR" -a "$ref" -b "$dist" -c 1 -d 1 --hausdorff=1 -r "$peak" \
+          --dropdups=2 --neighborsProc=1 --nbThreads=2
+        pc_error_d1 "$TMP/out" >> "$TMP/dp"
+      fi
+    done
+    d1=$(head -1 "$TMP/dq")
+    if [ "$(sort -u "$TMP/dq" | wc -l)" != 1 ] || [ "$d1" = error ]; then
+      echo "FAIL: $label: qm3d's D1 PSNR differs between runs or is missing: $(sort -u "$TMP/dq" | tr '\n' ' ')" >&2
+      STATUS=1
+    fi
+    target="wall <= 1/3 x pc_error's, peak RSS <= 1.5 x"
+    [ -n "$PC_ERROR" ] || target="(QM3D_PC_ERROR unset: no pc_error to compare)"
+    printf '| %s | qm3d | 2 | %s s | %s s | %s MB | %s | %s |\n' "$label" "$(stats "$TMP/tq" 0)" \
+      "$(stats "$TMP/tq" 1)" "$(stats "$TMP/tq" 2 1024)" "$d1" "$target"
+    [ -n "$PC_ERROR" ] || continue
+    pd1=$(head -1 "$TMP/dp")
+    printf '| %s | pc_error | 2 | %s s | %s s | %s MB | %s | |\n' "$label" "$(stats "$TMP/tp" 0)" \
+      "$(stats "$TMP/tp" 1)" "$(stats "$TMP/tp" 2 1024)" "$pd1"
+    wq=$(median "$TMP/tq" 0) wp=$(median "$TMP/tp" 0) mq=$(median "$TMP/tq" 2) mp=$(median "$TMP/tp" 2)
+    wall_ratio=$($PY -c "print('%.2f' % ($wq / max($wp, 0.01)))")
+    rss_ratio=$($PY -c "print('%.2f' % ($mq / $mp))")
+    met() { $PY -c "import sys; print('met' if $1 else 'missed')"; }
+    summary+=("$label: qm3d / pc_error: wall $wq / $wp s = $wall_ratio (target <= 0.33: $(met "$wall_ratio <= 1/3")), peak RSS $((${mq%.*} / 1024)) / $((${mp%.*} / 1024)) MB = $rss_ratio (target <= 1.5: $(met "$rss_ratio <= 1.5"))")
+    if same_psnr "$d1" "$pd1" && [ "$(sort -u "$TMP/dp" | wc -l)" = 1 ]; then
+      summary+=("ok: $label: D1 PSNR qm3d $d1 = pc_error $pd1")
+    else
+      summary+=("FAIL: $label: D1 PSNR qm3d $d1, pc_error $(sort -u "$TMP/dp" | tr '\n' ' ')")
+      STATUS=1
+    fi
+  done
+  echo
+  for line in "${summary[@]}"; do echo "$line"; done
 fi
 exit $STATUS
