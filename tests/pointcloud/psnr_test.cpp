@@ -146,6 +146,29 @@ TEST(Psnr, OneDirectionIsThatPass) {
   }
 }
 
+TEST(Psnr, EstimatedNormalsGivePcErrorsD2OnTheToolsFile) {
+  // vox1_ref_n.ply = vox1_ref.ply + add_pca_normals.py's normals: estimating them on vox1_ref.ply
+  // must give the D2 of the case with the file.
+  for (const PcErrorCase& c : test::pc_error_cases()) {
+    if (c.name != "vox1_gnoise1") continue;
+    const Registry& reg = cloud_registry();
+    const Input a = reg.read(test::reference_dir() / "voxel" / "vox1_ref.ply");
+    const Input b = reg.read(test::shared_data() / c.column.at("b"));
+    OptionValues v = option_values(c);
+    v["normals"] = "estimate";
+    const MetricResult r = run_metric(reg.get("psnr"), a, b, {}, v);
+    EXPECT_EQ(r.details.at("normals"), "estimated");
+    for (const std::string col : {"d2_mse", "d2_psnr", "d2_haus", "d2_haus_psnr"}) {
+      const std::string ours = col.find("haus") != std::string::npos
+                                   ? col.substr(0, 3) + "hausdorff" + col.substr(7)
+                                   : col;
+      test::expect_pc_error_value(c, "AB_" + col, value_of(r.ref_to_dist->values, ours));
+      test::expect_pc_error_value(c, "BA_" + col, value_of(r.dist_to_ref->values, ours));
+      test::expect_pc_error_value(c, "sym_" + col, value_of(r.values, ours));
+    }
+  }
+}
+
 // ---- pc_error's loading rules -----------------------------------------------------------------
 
 ColoredCloud cloud(std::vector<Vec3> p, std::vector<Rgb> c) { return {std::move(p), std::move(c)}; }
