@@ -34,6 +34,7 @@
 #include <cfloat>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <memory>
 #include <sstream>
 
@@ -163,6 +164,8 @@ std::size_t exact_ties(const std::uint32_t* idx, const double* d2, std::size_t f
   return n;
 }
 
+bool exactly_equal(double x, double y) { return x == y; }
+
 std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tree,
                                       const MpegCloud& b, const MpegTree& b_tree, bool average,
                                       int threads) {
@@ -176,7 +179,8 @@ std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tr
     std::uint32_t idx[kMaxNeighbours];
     double d2[kMaxNeighbours];
     const std::size_t found =
-        average ? b_tree.expanding_knn(na.points[i], 5, true, idx, d2) : b_tree.knn(na.points[i], 1, idx, d2);
+        average ? b_tree.tie_run_knn(na.points[i], 5, true, exactly_equal, idx, d2)
+                : b_tree.knn(na.points[i], 1, idx, d2);
     target_count[i] = static_cast<std::uint8_t>(exact_ties(idx, d2, average ? found : std::min<std::size_t>(found, 1), targets[i].data()));
   }
   std::vector<Point3f> normals(static_cast<std::size_t>(n_b), Point3f{0, 0, 0});
@@ -203,7 +207,7 @@ std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tr
       n = na.normals[idx[0]];
       continue;
     }
-    const std::size_t found = na_tree.expanding_knn(b.points[i], 5, true, idx, d2);
+    const std::size_t found = na_tree.tie_run_knn(b.points[i], 5, true, exactly_equal, idx, d2);
     std::uint32_t ties[kMaxNeighbours];
     const std::size_t num = exact_ties(idx, d2, found, ties);
     for (std::size_t t = 0; t < num; ++t) {
@@ -260,11 +264,16 @@ PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, 
   std::uint32_t idx[kMaxNeighbours];
   double d2[kMaxNeighbours];
   const Point3f& q = a.points[i];
-  const std::size_t found = tree.expanding_knn(q, 10, p.average_normals, idx, d2);
+  // Only the run of neighbours within kTieThreshold of each other matters (D1 uses the first):
+  // a 2-NN query settles most points, the full pc_error query the others.
+  const bool run = p.colour || normals != nullptr;
+  const auto tied = [](double x, double y) { return std::fabs(y - x) < kTieThreshold; };
+  const std::size_t found = run ? tree.tie_run_knn(q, 10, p.average_normals, tied, idx, d2)
+                                : tree.knn(q, 1, idx, d2);
   const std::uint32_t j = idx[0];
   std::size_t same = 1;
-  if (p.colour || normals != nullptr) {
-    while (same < found && std::fabs(d2[same] - d2[same - 1]) < kTieThreshold) ++same;
+  if (run) {
+    while (same < found && tied(d2[same - 1], d2[same])) ++same;
   }
   const Point3f& nearest = b.points[j];
   const double e0 = double(q[0]) - double(nearest[0]);
@@ -511,8 +520,6 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   progress.begin("loading");
   const int dups = static_cast<int>(options.duplicates);
   const bool weighted = options.tied == TiedNeighbours::kWeightedAverage;
-  ColoredCloud ref_only = reference, dist_only = distorted;
-  if (!options.colour) ref_only.colors.clear(), dist_only.colors.clear();
   const bool separate = !options.estimate_normals && !reference_normals.positions.empty();
   const std::vector<Vec3> estimated =
       options.estimate_normals ? estimated_normals(reference.positions, options.threads)
@@ -524,13 +531,17 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   check_normals(separate ? reference_normals.normals : own_normals,
                 separate ? reference_normals.positions.size() : reference.positions.size(),
                 normals_name);
-  const MpegCloud a = detail::load_mpeg_cloud(ref_only, own_normals, dups, weighted);
-  const MpegCloud b = detail::load_mpeg_cloud(dist_only, {}, dups, weighted);
+  const std::vector<Rgb>* ref_colours = options.colour ? &reference.colors : nullptr;
+  const std::vector<Rgb>* dist_colours = options.colour ? &distorted.colors : nullptr;
+  auto a_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async, [&] {
+    return detail::load_mpeg_cloud(reference.positions, ref_colours, own_normals, dups, weighted);
+  });
+  const MpegCloud b = detail::load_mpeg_cloud(distorted.positions, dist_colours, {}, dups, weighted);
+  const MpegCloud a = a_task.get();
   // A normals file is a cloud of its own (pc_error loads it with the same duplicate rule).
   const std::optional<MpegCloud> file_normals =
       separate ? std::optional<MpegCloud>(detail::load_mpeg_cloud(
-                     ColoredCloud{reference_normals.positions, {}}, reference_normals.normals, dups,
-                     false))
+                     reference_normals.positions, nullptr, reference_normals.normals, dups, false))
                : std::nullopt;
   if (file_normals && file_normals->size() != a.size()) {
     throw FormatError(normals_name + ": " + std::to_string(file_normals->size()) +
@@ -542,8 +553,6 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
                               "as pc_error, its normals are paired with the reference's points "
                               "by their order after sorting");
   }
-  ref_only = {};
-  dist_only = {};
   if (options.inputs_done) options.inputs_done();
   const MpegCloud& na = file_normals ? *file_normals : a;  // pc_error's cloudNormalsA
   const bool d2 = !na.normals.empty();
@@ -554,8 +563,11 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   }
 
   progress.begin("trees");
-  const MpegTree a_tree(a.points);
+  auto a_tree_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
+                                [&] { return std::make_unique<MpegTree>(a.points); });
   const MpegTree b_tree(b.points);
+  const std::unique_ptr<MpegTree> a_tree_owned = a_tree_task.get();
+  const MpegTree& a_tree = *a_tree_owned;
   const std::unique_ptr<MpegTree> na_tree =
       file_normals && file_normals->points != a.points ? std::make_unique<MpegTree>(na.points)
                                                        : nullptr;

@@ -34,13 +34,13 @@ std::vector<std::uint32_t> sorted_order(const std::vector<Point3f>& p) {
 
 }  // namespace
 
-MpegCloud load_mpeg_cloud(const ColoredCloud& cloud, const std::vector<Vec3>& normals,
-                          int duplicates, bool weighted) {
-  const std::size_t n = cloud.positions.size();
+MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colour_in,
+                          const std::vector<Vec3>& normals, int duplicates, bool weighted) {
+  const std::size_t n = positions.size();
   std::vector<Point3f> input(n);
-  for (std::size_t i = 0; i < n; ++i) input[i] = to_float(cloud.positions[i]);
+  for (std::size_t i = 0; i < n; ++i) input[i] = to_float(positions[i]);
   const std::vector<std::uint32_t> order = sorted_order(input);
-  const bool colours = !cloud.colors.empty();
+  const bool colours = colour_in != nullptr && !colour_in->empty();
 
   MpegCloud out;
   out.of_input.resize(n);
@@ -62,11 +62,12 @@ MpegCloud load_mpeg_cloud(const ColoredCloud& cloud, const std::vector<Vec3>& no
       if (!normals.empty()) out.normals.push_back(to_float(normals[i]));
       out.merged.push_back(duplicates == 2 && weighted ? static_cast<int>(run) : 1);
       if (!colours) continue;
-      Colour8 c{to_byte(cloud.colors[i].r), to_byte(cloud.colors[i].g), to_byte(cloud.colors[i].b)};
+      const Rgb& own = (*colour_in)[i];
+      Colour8 c{to_byte(own.r), to_byte(own.g), to_byte(own.b)};
       if (duplicates == 2 && run > 1) {
         long sum[3] = {0, 0, 0};
         for (std::size_t m = first; m < last; ++m) {
-          const Rgb& rgb = cloud.colors[order[m]];
+          const Rgb& rgb = (*colour_in)[order[m]];
           sum[0] += to_byte(rgb.r);
           sum[1] += to_byte(rgb.g);
           sum[2] += to_byte(rgb.b);

@@ -43,8 +43,9 @@ struct MpegCloud {
 /// normals to float32; sorted; runs of equal positions averaged (`duplicates` 2: colour =
 /// truncated mean, `merged` = run length when `weighted`), dropped (1: the first of each run
 /// kept) or kept (0).
-MpegCloud load_mpeg_cloud(const ColoredCloud& cloud, const std::vector<Vec3>& normals,
-                          int duplicates, bool weighted);
+/// `colours`: one per point, or nullptr (none); `normals`: one per point, or empty.
+MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colours,
+                          const std::vector<Vec3>& normals, int duplicates, bool weighted);
 
 /// pc_error's k-d tree over a cloud's points (nanoflann, float elements, double distances).
 class MpegTree {
@@ -58,6 +59,19 @@ class MpegTree {
   /// returns how many were written.
   std::size_t knn(const Point3f& query, std::size_t k, std::uint32_t* indices,
                   double* distances2) const;
+
+  /// The neighbours pc_error's expanding query would return that matter when only the run of
+  /// neighbours tied with the first counts (by `tied(d2_prev, d2_next)`): a 2-NN query first,
+  /// which is the prefix of any larger query of the same tree (nanoflann's results are the first
+  /// k of its (distance, traversal) order); when the first two are not tied, that first one
+  /// alone, else expanding_knn(query, first, expand, ...). Returns the count written.
+  template <typename Tied>
+  std::size_t tie_run_knn(const Point3f& query, std::size_t first, bool expand, Tied tied,
+                          std::uint32_t* indices, double* distances2) const {
+    const std::size_t found = knn(query, 2, indices, distances2);
+    if (found < 2 || !tied(distances2[0], distances2[1])) return std::min<std::size_t>(found, 1);
+    return expanding_knn(query, first, expand, indices, distances2);
+  }
 
   /// pc_error's expanding query (D: findMetric / scaleNormals): k = first, then k + 5, ...
   /// while `expand` and the first and the last of the k results are at the same distance and

@@ -80,8 +80,9 @@ def test_compare_runs_every_metric_that_applies():
                             **({"points": 2000} if name == "pcqm_sampled" else {}))
         assert result.score == alone.score, name
     clouds = qm3d.compare(CLOUD_REF, CLOUD_DIST)
-    assert list(clouds) == ["pcqm"]
+    assert list(clouds) == ["pcqm", "psnr"]
     assert clouds["pcqm"].score == qm3d.pcqm(CLOUD_REF, CLOUD_DIST).score
+    assert clouds["psnr"].score == qm3d.psnr(CLOUD_REF, CLOUD_DIST).score
 
 
 # ---- arrays, files and Open3D objects give identical scores -------------------------------

@@ -176,7 +176,7 @@ ColoredCloud cloud(std::vector<Vec3> p, std::vector<Rgb> c) { return {std::move(
 TEST(PsnrLoading, SortsAndAveragesDuplicatesWithTruncatedMeanColour) {
   const ColoredCloud c = cloud({{1, 0, 0}, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}},
                                {{10 / 255.0, 0, 0}, {1, 1, 1}, {13 / 255.0, 1, 0}, {0, 0, 0}});
-  const detail::MpegCloud m = detail::load_mpeg_cloud(c, {}, 2, true);
+  const detail::MpegCloud m = detail::load_mpeg_cloud(c.positions, &c.colors, {}, 2, true);
   ASSERT_EQ(m.size(), 3u);
   EXPECT_EQ(m.duplicates, 1u);
   EXPECT_EQ(m.points[0], (detail::Point3f{0, 0, 0}));
@@ -186,17 +186,17 @@ TEST(PsnrLoading, SortsAndAveragesDuplicatesWithTruncatedMeanColour) {
   EXPECT_EQ(m.merged[2], 2);
   EXPECT_EQ(m.merged[0], 1);
   EXPECT_EQ(m.of_input, (std::vector<std::uint32_t>{2, 0, 2, 1}));
-  const detail::MpegCloud dropped = detail::load_mpeg_cloud(c, {}, 1, true);
+  const detail::MpegCloud dropped = detail::load_mpeg_cloud(c.positions, &c.colors, {}, 1, true);
   EXPECT_EQ(dropped.colours[2], (detail::Colour8{10, 0, 0}));  // the first in file order
   EXPECT_EQ(dropped.merged[2], 1);
-  const detail::MpegCloud kept = detail::load_mpeg_cloud(c, {}, 0, true);
+  const detail::MpegCloud kept = detail::load_mpeg_cloud(c.positions, &c.colors, {}, 0, true);
   EXPECT_EQ(kept.size(), 4u);
   EXPECT_EQ(kept.duplicates, 0u);
 }
 
 TEST(PsnrLoading, CoordinatesAndNormalsBecomeFloat32) {
   const ColoredCloud c = cloud({{0.1, 0.2, 0.3}}, {{0, 0, 0}});
-  const detail::MpegCloud m = detail::load_mpeg_cloud(c, {{0.1, 0.2, 0.3}}, 2, false);
+  const detail::MpegCloud m = detail::load_mpeg_cloud(c.positions, &c.colors, {{0.1, 0.2, 0.3}}, 2, false);
   EXPECT_EQ(m.points[0][0], 0.1f);
   EXPECT_EQ(m.normals[0][2], 0.3f);
 }
