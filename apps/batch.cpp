@@ -171,6 +171,7 @@ class PairReports {
       if (f.size() < 6 || f[0] == "reference") continue;
       IndexRow r{f[0], f[1], f[2], std::nullopt, f[5], ""};
       if (f[4] == "ok" && !f[3].empty()) r.score = std::stod(f[3]);
+      if (const MetricSpec* spec = registry().find(r.metric)) r.higher_is_better = spec->higher_is_better;
       const std::string name = report_file_name(r.reference, r.distorted);
       if (std::filesystem::exists(o_.report_dir / name)) r.report = name;
       rows.push_back(std::move(r));

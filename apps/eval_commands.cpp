@@ -1,5 +1,6 @@
 #include "eval_commands.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -11,8 +12,9 @@
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/evaluation_io.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/common/version.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/common/version.h"
+#include "commands.h"
 #include "score_table.h"
 #include "train_command.h"
 
@@ -32,8 +34,13 @@ struct EvalData {
   std::optional<std::size_t> ci;
   JoinedRows join;
   KeyList missing;  ///< joined rows with an empty score, MOS or CI (e.g. failed batch pairs)
+  KeyList infinite;  ///< joined rows whose score is infinite (PSNR of identical geometry)
   std::vector<std::string> keys;
   std::vector<double> scores, mos, ci95;
+  /// Whether a higher score is better (a quality): from --orientation, else from the metric the
+  /// SCORES rows name; nullopt when neither says.
+  std::optional<bool> higher_is_better;
+  std::string orientation_source;  ///< "--orientation", "metric column: psnr", or empty
 };
 
 bool looks_like_paths(const KeyList& keys) {
@@ -55,12 +62,16 @@ void check_something_joined(const EvalData& d, bool stem) {
 
 void collect_values(EvalData& d) {
   for (std::size_t i = 0; i < d.join.keys.size(); ++i) {
-    const auto score = cell_number(d.scores_table, d.join.left[i], d.scores_value);
+    const auto score = cell_number(d.scores_table, d.join.left[i], d.scores_value, true);
     const auto mos = cell_number(d.mos_table, d.join.right[i], d.mos_value);
     const auto ci =
         d.ci ? cell_number(d.mos_table, d.join.right[i], *d.ci) : std::optional<double>(0);
     if (!score || !mos || !ci) {
       d.missing.add(d.join.keys[i]);
+      continue;
+    }
+    if (std::isinf(*score)) {
+      d.infinite.add(d.join.keys[i]);
       continue;
     }
     if (*ci < 0) {
@@ -73,6 +84,33 @@ void collect_values(EvalData& d) {
     d.mos.push_back(*mos);
     if (d.ci) d.ci95.push_back(*ci);
   }
+}
+
+// The orientation of the score column: --orientation, else the registered metric every used
+// row of SCORES names in its "metric" column (batch results), asked about that column ("score",
+// "d1_mse", "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe
+// (f1..f8) and for files without a metric column or with several metrics.
+void find_orientation(EvalData& d, const EvalCommandOptions& o) {
+  if (o.orientation != "auto") {
+    d.higher_is_better = o.orientation == "quality";
+    d.orientation_source = "--orientation";
+    return;
+  }
+  const auto& h = d.scores_table.header;
+  const auto column = std::find(h.begin(), h.end(), "metric");
+  if (column == h.end()) return;
+  const std::size_t c = static_cast<std::size_t>(column - h.begin());
+  std::string metric;
+  for (std::size_t row : d.join.left) {
+    const auto& cells = d.scores_table.rows[row];
+    const std::string name = c < cells.size() ? cells[c] : std::string();
+    if (name.empty() || (!metric.empty() && name != metric)) return;
+    metric = name;
+  }
+  const MetricSpec* spec = metric.empty() ? nullptr : registry().find(metric);
+  if (spec == nullptr) return;
+  d.higher_is_better = spec->column_higher_is_better(h[d.scores_value]);
+  if (d.higher_is_better) d.orientation_source = "metric column: " + metric;
 }
 
 EvalData load_eval_data(const EvalCommandOptions& o) {
@@ -88,6 +126,7 @@ EvalData load_eval_data(const EvalCommandOptions& o) {
   d.join = join_on_key(d.scores_table, d.scores_key, d.mos_table, d.mos_key, o.stem);
   check_something_joined(d, o.stem);
   collect_values(d);
+  find_orientation(d, o);
   return d;
 }
 
@@ -108,6 +147,11 @@ void warn_partial_join(const EvalData& d, bool quiet) {
               << " stimuli left out (empty or NaN score, MOS or CI): " << d.missing.examples()
               << "\n";
   }
+  if (d.infinite.count) {
+    std::cerr << "qm3d: warning: " << d.infinite.count
+              << " stimuli left out (infinite score, e.g. the PSNR of an unchanged geometry): "
+              << d.infinite.examples() << "\n";
+  }
 }
 
 // ---- writing -------------------------------------------------------------------------------
@@ -116,6 +160,22 @@ ordered_json keys_json(const KeyList& k) { return {{"count", k.count}, {"first",
 
 ordered_json table_json(const CsvTable& t, std::size_t key, std::size_t value, std::size_t rows) {
   return {{"file", t.path}, {"key", t.header[key]}, {"column", t.header[value]}, {"rows", rows}};
+}
+
+// Whether the scores rank the stimuli the way their orientation says (a quality rising with the
+// MOS: SROCC > 0; a distortion falling: SROCC < 0); nullopt when the orientation is unknown or
+// SROCC is 0 or NaN.
+std::optional<bool> agrees(const EvalData& d, const EvaluationResult& r) {
+  const double rho = r.srocc.value;
+  if (!d.higher_is_better || !(rho != 0) || std::isnan(rho)) return std::nullopt;
+  return (rho > 0) == *d.higher_is_better;
+}
+
+std::string orientation_text(const EvalData& d) {
+  if (!d.higher_is_better) return "unknown (--orientation quality|distortion says)";
+  return std::string(*d.higher_is_better ? "quality (higher is better)"
+                                         : "distortion (lower is better)") +
+         ", from " + d.orientation_source;
 }
 
 ordered_json eval_json(const EvalData& d, const EvaluationResult& r, const EvalCommandOptions& o) {
@@ -128,6 +188,11 @@ ordered_json eval_json(const EvalData& d, const EvaluationResult& r, const EvalC
   j["stimuli"] = r.count;
   j["unmatched"] = {{"scores", keys_json(d.join.left_only)}, {"mos", keys_json(d.join.right_only)}};
   j["missing_values"] = keys_json(d.missing);
+  j["infinite_scores"] = keys_json(d.infinite);
+  j["orientation"] = {
+      {"higher_is_better", d.higher_is_better ? ordered_json(*d.higher_is_better) : ordered_json()},
+      {"from", d.orientation_source.empty() ? ordered_json() : ordered_json(d.orientation_source)},
+      {"agrees", d.higher_is_better && agrees(d, r) ? ordered_json(*agrees(d, r)) : ordered_json()}};
   for (const auto& [name, s] : named_statistics(r)) j["statistics"][name] = statistic_json(s);
   j["logistic"] = logistic_json(r.fit);
   j["bootstrap"] = {
@@ -186,6 +251,8 @@ std::string eval_text(const EvalData& d, const EvaluationResult& r, const EvalCo
       << d.scores_table.header[d.scores_key] << ", score " << d.scores_table.header[d.scores_value]
       << ") vs " << d.mos_table.path << " (key " << d.mos_table.header[d.mos_key] << ", MOS "
       << d.mos_table.header[d.mos_value] << ")\n";
+  out << "orientation: " << orientation_text(d)
+      << "; the signs of PLCC, SROCC and KROCC are those of the scores\n";
   out << interval_header(r, o);
   char line[160];
   for (const auto& [name, s] : named_statistics(r)) {
@@ -238,6 +305,13 @@ int run_eval(const EvalCommandOptions& o, bool quiet) {
   if (!quiet && !r.fit.converged && !r.fit.bounded) {
     std::cerr << "qm3d: warning: the logistic fit did not converge in its evaluation budget\n";
   }
+  if (!quiet && agrees(d, r) == false) {
+    std::cerr << "qm3d: warning: " << d.scores_table.path << ": column \""
+              << d.scores_table.header[d.scores_value] << "\" is a "
+              << (*d.higher_is_better ? "quality (higher is better)" : "distortion (lower is better)")
+              << " but SROCC with " << d.mos_table.header[d.mos_value] << " is "
+              << fixed(r.srocc.value) << ": is the MOS column a DMOS, or the orientation wrong?\n";
+  }
   const std::string text = o.json  ? eval_json(d, r, o).dump(2) + "\n"
                            : o.csv ? eval_csv(r)
                                    : eval_text(d, r, o);
@@ -265,6 +339,12 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_flag("--stem", o.stem,
                 "Match keys by file stem (directories and extension removed), e.g. batch paths "
                 "against stimulus names");
+  cmd->add_option("--orientation", o.orientation,
+                  "Whether a higher score is better: quality, distortion, or auto (from the "
+                  "registered metric SCORES' metric column names: psnr is a quality, cmdm a "
+                  "distortion); reported, and a warning when the scores rank the other way")
+      ->check(CLI::IsMember({"auto", "distortion", "quality"}))
+      ->capture_default_str();
   cmd->add_option("--bootstrap", o.bootstrap,
                   "Bootstrap replicates for the 95% intervals (0 = none; at most " +
                       std::to_string(kMaxBootstrapReplicates) + ")")

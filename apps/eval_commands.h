@@ -21,6 +21,7 @@ struct EvalCommandOptions {
   std::string mos_column;     ///< default: "mos" (any case), else the other column of 2
   std::string ci_column;      ///< MOS 95% CI half-widths; enables the outlier ratio
   bool stem = false;          ///< match keys by file stem
+  std::string orientation = "auto";  ///< auto, distortion, quality
   std::size_t bootstrap = 1000;
   std::uint64_t seed = 1;
   bool json = false, csv = false;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -289,6 +290,8 @@ json metrics_json(const std::vector<ReportEntry>& entries) {
     m["title"] = e.spec->title;
     m["feature_names"] = e.result->feature_names;
     m["per_element_on_input"] = e.spec->per_element_on_input;
+    m["higher_is_better"] = e.spec->higher_is_better;
+    m["symmetric_rule"] = e.spec->symmetric_rule;
     metrics.push_back(std::move(m));
   }
   return metrics;
@@ -460,13 +463,27 @@ struct IndexPair {
   std::map<std::string, std::optional<double>> scores;
 };
 
+/// A metric column of the index: its name and whether higher scores are better.
+struct IndexColumn {
+  std::string metric;
+  bool higher_is_better = false;
+  double lo = HUGE_VAL, hi = -HUGE_VAL;  ///< range of the finite scores
+};
+
 std::vector<IndexPair> group_pairs(const std::vector<IndexRow>& rows,
-                                   std::vector<std::string>& columns) {
+                                   std::vector<IndexColumn>& columns) {
   std::vector<IndexPair> pairs;
   std::map<std::pair<std::string, std::string>, std::size_t> at;
   for (const IndexRow& r : rows) {
-    if (std::find(columns.begin(), columns.end(), r.metric) == columns.end() && r.score) {
-      columns.push_back(r.metric);
+    auto c = std::find_if(columns.begin(), columns.end(),
+                          [&](const IndexColumn& k) { return k.metric == r.metric; });
+    if (c == columns.end() && r.score) {
+      columns.push_back({r.metric, r.higher_is_better});
+      c = columns.end() - 1;
+    }
+    if (c != columns.end() && r.score && std::isfinite(*r.score)) {
+      c->lo = std::min(c->lo, *r.score);
+      c->hi = std::max(c->hi, *r.score);
     }
     const auto [it, added] = at.emplace(std::make_pair(r.reference, r.distorted), pairs.size());
     if (added) pairs.push_back({r.reference, r.distorted, r.report, "", {}});
@@ -478,13 +495,17 @@ std::vector<IndexPair> group_pairs(const std::vector<IndexRow>& rows,
   return pairs;
 }
 
-// Highest score of the first column first; pairs without it after, failed pairs last.
-void sort_pairs(std::vector<IndexPair>& pairs, const std::vector<std::string>& columns) {
+// How distorted a score is: larger = worse, whatever the metric's orientation (a quality's +inf,
+// identical inputs, is the least distorted).
+double badness(const IndexColumn& c, double v) { return c.higher_is_better ? -v : v; }
+
+// Most distorted pair of the first column first; pairs without it after, failed pairs last.
+void sort_pairs(std::vector<IndexPair>& pairs, const std::vector<IndexColumn>& columns) {
   const auto key = [&](const IndexPair& p) {
-    for (const std::string& c : columns) {
-      const auto it = p.scores.find(c);
-      if (it != p.scores.end() && it->second && std::isfinite(*it->second)) {
-        return std::make_pair(c == columns.front() ? 0 : 1, -*it->second);
+    for (const IndexColumn& c : columns) {
+      const auto it = p.scores.find(c.metric);
+      if (it != p.scores.end() && it->second && !std::isnan(*it->second)) {
+        return std::make_pair(&c == &columns.front() ? 0 : 1, -badness(c, *it->second));
       }
     }
     return std::make_pair(2, 0.0);
@@ -493,20 +514,43 @@ void sort_pairs(std::vector<IndexPair>& pairs, const std::vector<std::string>& c
                    [&](const IndexPair& a, const IndexPair& b) { return key(a) < key(b); });
 }
 
+// A number as JavaScript's parseFloat reads it (inf as "Infinity").
+std::string js_number(double v) {
+  if (std::isinf(v)) return v > 0 ? "Infinity" : "-Infinity";
+  return format_double(v);
+}
+
+// The cell's tint: transparent for the least distorted pair of the column, strongest red for
+// the most distorted.
+std::string tint(const IndexColumn& c, double v) {
+  if (!(c.hi > c.lo)) return "";
+  double t = std::isfinite(v) ? (v - c.lo) / (c.hi - c.lo) : (v > 0 ? 1.0 : 0.0);
+  if (c.higher_is_better) t = 1 - t;
+  char style[64];
+  std::snprintf(style, sizeof style, " style=\"background:rgba(215,48,39,%.2f)\"", 0.45 * t);
+  return style;
+}
+
 std::string index_rows_html(const std::vector<IndexPair>& pairs,
-                            const std::vector<std::string>& columns) {
+                            const std::vector<IndexColumn>& columns) {
   std::ostringstream o;
   o << "<thead><tr><th data-type=\"text\">distorted</th><th data-type=\"text\">reference</th>";
-  for (const auto& c : columns) o << "<th data-type=\"number\">" << markup_escaped(c) << "</th>";
+  for (const auto& c : columns) {
+    o << "<th data-type=\"number\" data-worse=\"" << (c.higher_is_better ? "lower" : "higher")
+      << "\" title=\"" << (c.higher_is_better ? "a quality: higher is better" : "a distortion: "
+                                                                          "lower is better")
+      << "\">" << markup_escaped(c.metric) << "</th>";
+  }
   o << "<th data-type=\"text\">report</th></tr></thead>\n<tbody>\n";
   for (const IndexPair& p : pairs) {
     o << "<tr" << (p.error.empty() ? "" : " class=\"failed\"") << "><td>"
       << markup_escaped(p.distorted) << "</td><td>" << markup_escaped(p.reference) << "</td>";
     for (const auto& c : columns) {
-      const auto it = p.scores.find(c);
+      const auto it = p.scores.find(c.metric);
       const bool has = it != p.scores.end() && it->second;
-      o << "<td class=\"num\" data-value=\"" << (has ? format_double(*it->second) : "") << "\">"
-        << (has ? format_double(*it->second) : "") << "</td>";
+      o << "<td class=\"num\" data-value=\"" << (has ? js_number(*it->second) : "") << "\""
+        << (has ? tint(c, *it->second) : "") << ">" << (has ? format_double(*it->second) : "")
+        << "</td>";
     }
     o << "<td>";
     if (!p.report.empty()) o << "<a href=\"" << markup_escaped(p.report) << "\">report</a>";
@@ -521,7 +565,7 @@ std::string index_rows_html(const std::vector<IndexPair>& pairs,
 
 void write_report_index(const std::filesystem::path& file, const std::vector<IndexRow>& rows,
                         const std::string& title) {
-  std::vector<std::string> columns;
+  std::vector<IndexColumn> columns;
   std::vector<IndexPair> pairs = group_pairs(rows, columns);
   sort_pairs(pairs, columns);
   const std::string table = index_rows_html(pairs, columns);
@@ -533,8 +577,10 @@ void write_report_index(const std::filesystem::path& file, const std::vector<Ind
         o << markup_escaped(title);
       } else if (marker == "SUMMARY") {
         o << pairs.size() << " pairs, " << failed << " failed; sorted by "
-          << markup_escaped(columns.empty() ? std::string("score") : columns.front())
-          << ", most distorted first (click a column to sort by it). qm3d " << kVersion;
+          << markup_escaped(columns.empty() ? std::string("score") : columns.front().metric)
+          << ", most distorted first (click a column to sort by it; the redder a score, the "
+             "more distorted the pair among the column's). qm3d "
+          << kVersion;
       } else if (marker == "TABLE") {
         o << table;
       } else {

@@ -86,10 +86,13 @@ struct IndexRow {
   std::optional<double> score;  ///< unset: the row failed
   std::string error;
   std::string report;  ///< the pair's report, relative to the index; empty = none
+  bool higher_is_better = false;  ///< the metric's score is a quality (MetricSpec)
 };
 
 /// Writes index.html: one row per pair (its metrics as columns), sorted by the score of the first
-/// metric column, highest (most distorted) first, failed pairs last; each links to its report.
+/// metric column, most distorted first (the highest distortion, the lowest quality), failed pairs
+/// last; each links to its report. Each score cell is tinted by how distorted the pair is among
+/// the column's pairs (the metric's orientation decides which end is worse).
 void write_report_index(const std::filesystem::path& file, const std::vector<IndexRow>& rows,
                         const std::string& title);
 

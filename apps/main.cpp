@@ -182,12 +182,30 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   return kExitOk;
 }
 
+// "Distortions (0 = identical, larger is worse): CMDM, ...; qualities (...): PSNR.", from the
+// registry's orientation of each metric.
+std::string orientation_line() {
+  std::string distortions, qualities;
+  for (const MetricSpec& spec : registry().metrics()) {
+    std::string& list = spec.higher_is_better ? qualities : distortions;
+    list += (list.empty() ? "" : ", ") + spec.title;
+  }
+  std::string line;
+  if (!distortions.empty()) line += "Distortions (0 = identical, larger is worse): " + distortions;
+  if (!qualities.empty()) {
+    line += std::string(line.empty() ? "Q" : "; q") +
+            "ualities (higher is better, inf = identical): " + qualities;
+  }
+  return line + ".";
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"qm3d " + std::string(kVersion) +
-               " - visual quality metrics for coloured 3D content: CMDM for meshes with vertex "
-               "colours, PCQM for coloured point clouds.\nScores are distortions: 0 means "
-               "identical, larger is worse. Inputs are recognised by content (PLY, OBJ, OFF, "
-               "PCD); a PLY with faces is a mesh."};
+               " - visual quality metrics for coloured 3D content: CMDM and MSDM2 for meshes, "
+               "PCQM for coloured point clouds, MPEG pc_error's PSNR.\n" +
+               orientation_line() +
+               " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
+               "mesh."};
   app.set_version_flag("--version", std::string("qm3d ") + kVersion);
   app.require_subcommand(1);
   GlobalOptions global;

@@ -134,14 +134,16 @@ std::size_t value_column(const CsvTable& table, const std::string& name,
                     " (columns: " + joined_names(table.header) + ")");
 }
 
-std::optional<double> cell_number(const CsvTable& table, std::size_t row, std::size_t column) {
+std::optional<double> cell_number(const CsvTable& table, std::size_t row, std::size_t column,
+                                  bool allow_infinite) {
   const std::string& cell = table.rows[row][column];
   if (is_missing(cell)) return std::nullopt;
   const char* begin = cell.data() + (cell[0] == '+' ? 1 : 0);
   const char* end = cell.data() + cell.size();
   double value = 0;
   const auto [ptr, ec] = std::from_chars(begin, end, value);
-  if (ec != std::errc() || ptr != end || !std::isfinite(value)) {
+  if (ec != std::errc() || ptr != end || std::isnan(value) ||
+      (std::isinf(value) && !allow_infinite)) {
     throw FormatError(where(table, table.line_numbers[row]) + ": column \"" + table.header[column] +
                       "\": \"" + cell + "\" is not a number");
   }

@@ -47,7 +47,9 @@ std::size_t value_column(const CsvTable& table, const std::string& name,
 
 /// The number in a cell; nullopt when the cell is empty or "nan"/"NA" (a missing value).
 /// @throws FormatError "FILE:LINE: column "x": "abc" is not a number".
-std::optional<double> cell_number(const CsvTable& table, std::size_t row, std::size_t column);
+/// `allow_infinite`: "inf" / "-inf" (a PSNR of identical inputs) are values, not errors.
+std::optional<double> cell_number(const CsvTable& table, std::size_t row, std::size_t column,
+                                  bool allow_infinite = false);
 
 /// A list of keys, counted, with the first few kept for messages.
 struct KeyList {

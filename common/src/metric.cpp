@@ -356,6 +356,19 @@ std::vector<std::string> csv_value_names(const std::vector<const MetricSpec*>& s
   return names;
 }
 
+std::optional<bool> MetricSpec::column_higher_is_better(const std::string& column) const {
+  std::string name = column;
+  for (const char* prefix : {"dist_to_ref_", "ref_to_dist_"}) {
+    if (name.rfind(prefix, 0) == 0) name.erase(0, std::strlen(prefix));
+  }
+  if (name == "score") return higher_is_better;
+  if (std::find(value_names.begin(), value_names.end(), name) == value_names.end()) {
+    return std::nullopt;
+  }
+  return std::find(quality_value_names.begin(), quality_value_names.end(), name) !=
+         quality_value_names.end();
+}
+
 bool MetricSpec::applies(const Input& reference, const Input& distorted) const {
   switch (applies_to) {
     case AppliesTo::kMeshes: return reference.is_mesh() && distorted.is_mesh();

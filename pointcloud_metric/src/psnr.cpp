@@ -666,8 +666,12 @@ MetricSpec psnr_spec() {
       "symmetric: both passes, each value the worse of the two (pc_error's \"Final\"); "
       "ref-to-dist: the reference's points matched on the distorted cloud (pc_error's A->B, -s); "
       "dist-to-ref: the distorted cloud's points matched on the reference (B->A)";
+  s.symmetric_rule = "worse of the two";
   s.per_element_on_input = true;
   s.value_names = psnr_value_names();
+  for (const std::string& n : s.value_names) {
+    if (n.size() > 5 && n.compare(n.size() - 5, 5, "_psnr") == 0) s.quality_value_names.push_back(n);
+  }
   s.options = {
       {"peak",
        "Peak p of the geometry PSNRs, 10 log10(3 p^2 / mse) (pc_error -r, e.g. 1023 for 10-bit "

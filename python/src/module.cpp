@@ -175,6 +175,8 @@ py::dict spec_dict(const MetricSpec& s) {
   d["takes_model"] = s.takes_model;
   d["model_metric"] = s.model_name();
   d["value_names"] = s.value_names;
+  d["higher_is_better"] = s.higher_is_better;
+  d["quality_value_names"] = s.quality_value_names;
   py::list options;
   for (const OptionSpec& o : s.options) {
     py::dict od;

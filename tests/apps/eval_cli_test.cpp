@@ -180,6 +180,68 @@ TEST_F(EvalCli, StemMatchesBatchPathsToStimulusNames) {
       << r.err;
 }
 
+// The orientation of a score column comes from the metric the rows name (psnr: a quality, its
+// d1_mse a distortion; cmdm: a distortion), or --orientation; a column ranking the other way is
+// warned about; an infinite PSNR (unchanged geometry) is left out with a warning.
+TEST_F(EvalCli, OrientationFromTheMetricColumnOrTheOption) {
+  std::string psnr = "reference,distorted,metric,score,status,d1_mse\n";
+  const double db[] = {20, 24, 29, 33, 38, 41};
+  for (int k = 0; k < 6; ++k) {
+    psnr += "r.ply,s" + std::to_string(k + 1) + ".ply,psnr," + exact(db[k]) + ",ok," +
+            exact(std::pow(10.0, -db[k] / 10)) + "\n";
+  }
+  psnr += "r.ply,s7.ply,psnr,inf,ok,0\n";
+  const fs::path scores = file("psnr.csv", psnr);
+  const fs::path mos =
+      file("mos.csv", "distorted,mos\ns1.ply,1.2\ns2.ply,2.1\ns3.ply,2.9\ns4.ply,3.8\n"
+                      "s5.ply,4.1\ns6.ply,4.6\ns7.ply,4.9\n");
+  const std::string base = "eval " + scores.string() + " " + mos.string() + " --bootstrap 0";
+
+  const CliRun q = qm3d(base + " --json");
+  ASSERT_EQ(q.code, 0) << q.err;
+  json j = json::parse(q.out);
+  EXPECT_EQ(j["orientation"]["higher_is_better"], true);
+  EXPECT_EQ(j["orientation"]["from"], "metric column: psnr");
+  EXPECT_EQ(j["orientation"]["agrees"], true);
+  EXPECT_EQ(j["stimuli"], 6);
+  EXPECT_EQ(j["infinite_scores"]["first"], json::array({"s7.ply"}));
+  EXPECT_DOUBLE_EQ(j["statistics"]["srocc"]["value"].get<double>(), 1.0);
+  EXPECT_NE(q.err.find("1 stimuli left out (infinite score"), std::string::npos) << q.err;
+  EXPECT_EQ(q.err.find("SROCC"), std::string::npos) << q.err;
+
+  const CliRun mse = qm3d(base + " --scores-column d1_mse --json");
+  ASSERT_EQ(mse.code, 0) << mse.err;
+  j = json::parse(mse.out);
+  EXPECT_EQ(j["orientation"]["higher_is_better"], false);
+  EXPECT_EQ(j["orientation"]["agrees"], true);
+  EXPECT_EQ(j["stimuli"], 7);  // the zero MSE is a value
+
+  const CliRun text = qm3d(base);
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("orientation: quality (higher is better), from metric column: psnr"),
+            std::string::npos)
+      << text.out;
+
+  // Told it is a distortion, the PSNR ranks the other way: a warning naming file and column.
+  const CliRun wrong = qm3d(base + " --orientation distortion --json");
+  ASSERT_EQ(wrong.code, 0) << wrong.err;
+  j = json::parse(wrong.out);
+  EXPECT_EQ(j["orientation"]["from"], "--orientation");
+  EXPECT_EQ(j["orientation"]["agrees"], false);
+  EXPECT_NE(wrong.err.find(scores.string() + ": column \"score\" is a distortion (lower is "
+                                             "better) but SROCC with mos is 1.0000"),
+            std::string::npos)
+      << wrong.err;
+
+  // No metric column: unknown, no warning; a bad value is refused.
+  const fs::path bare = file("bare.csv", "distorted,score\ns1.ply,1\ns2.ply,2\ns3.ply,3\n"
+                                         "s4.ply,4\ns5.ply,5\ns6.ply,6\n");
+  const CliRun unknown = qm3d("eval " + bare.string() + " " + mos.string() + " --bootstrap 0 --json");
+  ASSERT_EQ(unknown.code, 0) << unknown.err;
+  EXPECT_TRUE(json::parse(unknown.out)["orientation"]["higher_is_better"].is_null());
+  EXPECT_EQ(qm3d(base + " --orientation up").code, 1);
+}
+
 TEST_F(EvalCli, BadInputIsOneLineNamingTheFileAndColumn) {
   const auto one_line_error = [](const CliRun& r) {
     EXPECT_EQ(r.code, 2) << r.err;

@@ -210,5 +210,32 @@ TEST(HtmlReport, IndexSortsByScoreAndLinksReports) {
   EXPECT_NE(text.find("cannot read"), std::string::npos);
 }
 
+// A quality column (psnr) puts its lowest score first and tints it most; +inf (unchanged
+// geometry) is the least distorted, written for JavaScript's parseFloat.
+TEST(HtmlReport, IndexOrdersAQualityLowestFirst) {
+  const fs::path file = fs::temp_directory_path() /
+                        ("qm3d_html_report_qindex_" + std::to_string(::getpid()) + ".html");
+  write_report_index(file,
+                     {{"r.ply", "mid.ply", "psnr", 30.0, "", "", true},
+                      {"r.ply", "same.ply", "psnr", HUGE_VAL, "", "", true},
+                      {"r.ply", "worst.ply", "psnr", 10.0, "", "", true},
+                      {"r.ply", "best.ply", "psnr", 50.0, "", "", true}},
+                     "t");
+  const std::string text = slurp(file);
+  fs::remove(file);
+  const auto worst = text.find("worst.ply"), mid = text.find("mid.ply"),
+             best = text.find("best.ply"), same = text.find("same.ply");
+  ASSERT_NE(worst, std::string::npos);
+  EXPECT_LT(worst, mid);
+  EXPECT_LT(mid, best);
+  EXPECT_LT(best, same);
+  EXPECT_NE(text.find("data-worse=\"lower\""), std::string::npos);
+  EXPECT_NE(text.find("data-value=\"Infinity\""), std::string::npos);
+  EXPECT_NE(text.find("data-value=\"10\" style=\"background:rgba(215,48,39,0.45)\""),
+            std::string::npos);
+  EXPECT_NE(text.find("data-value=\"50\" style=\"background:rgba(215,48,39,0.00)\""),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace qm3d::app

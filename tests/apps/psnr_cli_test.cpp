@@ -85,6 +85,19 @@ TEST_F(PsnrCli, TextEchoesThePeakAndWritesInf) {
   EXPECT_NE(given.out.find("peak 1023 (given)"), std::string::npos) << given.out;
 }
 
+// --help says which scores are distortions and which qualities (from the registry).
+TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
+  const auto help = qm3d("--help");
+  ASSERT_EQ(help.code, 0) << help.err;
+  EXPECT_NE(help.out.find("Distortions (0 = identical, larger is worse): CMDM, MSDM2, PCQM"),
+            std::string::npos)
+      << help.out;
+  EXPECT_NE(help.out.find("qualities (higher is better, inf = identical): PSNR."),
+            std::string::npos)
+      << help.out;
+  EXPECT_EQ(help.out.find("Scores are distortions"), std::string::npos) << help.out;
+}
+
 TEST_F(PsnrCli, CsvHasTheNamedValueColumns) {
   const auto run = qm3d("psnr reference/mpeg/vox1_ref_n.ply reference/mpeg/vox1_ref_n.ply --csv");
   ASSERT_EQ(run.code, 0) << run.err;

@@ -117,6 +117,22 @@ TEST(Psnr, JsonCarriesTheValuesWithInfinityAsNull) {
   }
 }
 
+// The registry's orientation of each result column: the score and the *_psnr values are
+// qualities, the MSEs and Hausdorff distances distortions, other columns unknown.
+TEST(Psnr, ColumnsKnowWhetherHigherIsBetter) {
+  const MetricSpec& psnr = cloud_registry().get("psnr");
+  EXPECT_EQ(psnr.column_higher_is_better("score"), true);
+  EXPECT_EQ(psnr.column_higher_is_better("ref_to_dist_score"), true);
+  EXPECT_EQ(psnr.column_higher_is_better("d1_psnr"), true);
+  EXPECT_EQ(psnr.column_higher_is_better("dist_to_ref_c2_hausdorff_psnr"), true);
+  EXPECT_EQ(psnr.column_higher_is_better("d2_mse"), false);
+  EXPECT_EQ(psnr.column_higher_is_better("c0_hausdorff"), false);
+  EXPECT_EQ(psnr.column_higher_is_better("seconds"), std::nullopt);
+  const MetricSpec& pcqm = cloud_registry().get("pcqm");
+  EXPECT_EQ(pcqm.column_higher_is_better("score"), false);
+  EXPECT_EQ(pcqm.column_higher_is_better("dist_to_ref_f3"), std::nullopt);
+}
+
 TEST(Psnr, SameBitsForAnyThreadCount) {
   for (const PcErrorCase& c : test::pc_error_cases()) {
     if (c.name != "vox1_requant8dup_np2" && c.name != "sph_down0.5") continue;

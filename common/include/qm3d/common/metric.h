@@ -162,6 +162,8 @@ struct MetricSpec {
   Input::Kind reads = Input::Kind::kCloud;
   Direction default_direction = Direction::kSymmetric;
   std::string direction_help;  ///< what the directions mean for this metric
+  /// How the symmetric score is made of the two directions' (as the report says it).
+  std::string symmetric_rule = "mean";
   bool takes_model = false;    ///< a linear model of f1..f8 (--weights / --model) applies
   /// The metric a model file must name to apply here (empty = `name`; pcqm_sampled takes PCQM
   /// models).
@@ -176,7 +178,14 @@ struct MetricSpec {
   /// The names of the values the metric reports by name (MetricResult::values and each
   /// DirectionResult::values: their CSV columns), in order; empty for f1..f8 metrics.
   std::vector<std::string> value_names;
+  /// The values among value_names that are qualities (higher is better, like a PSNR); the
+  /// others are distortions (an MSE, a Hausdorff distance).
+  std::vector<std::string> quality_value_names;
 
+  /// Whether a higher number in this result column is better: "score" and
+  /// "dist_to_ref_score" / "ref_to_dist_score" by higher_is_better, a named value (bare or with a
+  /// direction prefix) by quality_value_names; nullopt for any other column (f1..f8, seconds).
+  std::optional<bool> column_higher_is_better(const std::string& column) const;
   /// True when the metric scores this pair of inputs.
   bool applies(const Input& reference, const Input& distorted) const;
   /// The option values with every default filled in; std::invalid_argument naming the option
