@@ -172,7 +172,7 @@ std::optional<bool> agrees(const EvalData& d, const EvaluationResult& r) {
 }
 
 std::string orientation_text(const EvalData& d) {
-  if (!d.higher_is_better) return "unknown (--orientation quality|distortion says)";
+  if (!d.higher_is_better) return "unknown (set it with --orientation quality|distortion)";
   return std::string(*d.higher_is_better ? "quality (higher is better)"
                                          : "distortion (lower is better)") +
          ", from " + d.orientation_source;

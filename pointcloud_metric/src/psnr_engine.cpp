@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <utility>
 #include <nanoflann.hpp>
 #include <numeric>
 
@@ -20,15 +22,42 @@ Point3f to_float(const Vec3& v) {
   return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
 }
 
+// A float's bits mapped so that their unsigned order is the float order, -0 and +0 as one key
+// (they compare equal). Coordinates are finite here (the readers refuse NaN and infinities).
+std::uint64_t sort_key(float f) {
+  if (f == 0.0f) f = 0.0f;
+  std::uint32_t u = 0;
+  std::memcpy(&u, &f, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
 // The order of the sort after loading: std::array<float, 3>'s lexicographic operator<, ties
-// (equal positions) by file order, as pc_error's comparator.
+// (equal positions) by file order, as pc_error's comparator (std::sort of the points with a
+// comparator that breaks ties by index: a total order, so any correct sort gives this
+// permutation). Computed by a least-significant-digit radix sort: stable counting sorts on z,
+// then y, then x, 11 bits at a time, each over (key, index) pairs; a digit all points share is
+// skipped.
 std::vector<std::uint32_t> sorted_order(const std::vector<Point3f>& p) {
-  std::vector<std::uint32_t> order(p.size());
+  const std::size_t n = p.size();
+  std::vector<std::uint32_t> order(n);
   std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    if (p[a] == p[b]) return a < b;
-    return p[a] < p[b];
-  });
+  std::vector<std::uint64_t> items(n), scratch(n);
+  constexpr int kBits = 11;
+  std::vector<std::size_t> count(std::size_t(1) << kBits);
+  for (int dim = 2; dim >= 0; --dim) {
+    for (std::size_t k = 0; k < n; ++k) items[k] = (sort_key(p[order[k]][dim]) << 32) | order[k];
+    for (int shift = 32; shift < 64; shift += kBits) {
+      const auto digit = [&](std::uint64_t v) { return (v >> shift) & ((1u << kBits) - 1); };
+      std::fill(count.begin(), count.end(), 0);
+      for (std::uint64_t v : items) ++count[digit(v)];
+      if (n == 0 || count[digit(items[0])] == n) continue;
+      std::size_t start = 0;
+      for (std::size_t& c : count) start += std::exchange(c, start);
+      for (std::uint64_t v : items) scratch[count[digit(v)]++] = v;
+      items.swap(scratch);
+    }
+    for (std::size_t k = 0; k < n; ++k) order[k] = static_cast<std::uint32_t>(items[k]);
+  }
   return order;
 }
 

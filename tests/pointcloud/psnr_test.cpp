@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+#include <numeric>
+#include <algorithm>
+#include <iterator>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -208,6 +212,36 @@ TEST(PsnrLoading, SortsAndAveragesDuplicatesWithTruncatedMeanColour) {
   const detail::MpegCloud kept = detail::load_mpeg_cloud(c.positions, &c.colors, {}, 0, true);
   EXPECT_EQ(kept.size(), 4u);
   EXPECT_EQ(kept.duplicates, 0u);
+}
+
+// The radix sort gives the permutation of pc_error's std::sort with an index tie-break: the
+// lexicographic float order, -0 equal to +0, ties in file order (checked on many ties, negative
+// and signed-zero coordinates, and magnitudes across the exponent range).
+TEST(PsnrLoading, SortIsTheLexicographicFloatOrderWithTiesInFileOrder) {
+  std::mt19937_64 rng(7);
+  const double values[] = {-0.0, 0.0, 1.0, -1.0, 0.5, -3e10, 3e10, 1e-30, -1e-30, 2.25, 1023};
+  std::vector<Vec3> p(20000);
+  for (Vec3& v : p) {
+    for (int d = 0; d < 3; ++d) {
+      v[d] = (rng() % 4 == 0) ? (static_cast<double>(rng() % 2000001) - 1e6) * 1e-3
+                              : values[rng() % std::size(values)];
+    }
+  }
+  const detail::MpegCloud m = detail::load_mpeg_cloud(p, nullptr, {}, 0, false);
+  std::vector<std::uint32_t> expected(p.size());
+  std::iota(expected.begin(), expected.end(), 0u);
+  const auto f = [&](std::uint32_t i) {
+    return detail::Point3f{static_cast<float>(p[i][0]), static_cast<float>(p[i][1]),
+                           static_cast<float>(p[i][2])};
+  };
+  std::sort(expected.begin(), expected.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return f(a) == f(b) ? a < b : f(a) < f(b);
+  });
+  ASSERT_EQ(m.size(), p.size());
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    ASSERT_EQ(m.of_input[expected[k]], k) << "place " << k;
+    ASSERT_EQ(m.points[k], f(expected[k])) << "place " << k;
+  }
 }
 
 TEST(PsnrLoading, CoordinatesAndNormalsBecomeFloat32) {
