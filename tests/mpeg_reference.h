@@ -12,6 +12,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -133,6 +134,25 @@ inline void expect_pc_error_value(const PcErrorCase& c, const std::string& colum
     return;
   }
   EXPECT_NEAR(*got, expected, 1e-8 * std::fabs(expected));
+}
+
+/// A named value of a JSON `features` object: nullopt when absent, +inf for null (an infinite
+/// PSNR).
+inline std::optional<double> json_feature(const nlohmann::json& features, const std::string& name) {
+  if (!features.contains(name)) return std::nullopt;
+  const nlohmann::json& v = features.at(name);
+  return v.is_null() ? HUGE_VAL : v.get<double>();
+}
+
+/// Every value of the case in a psnr result's JSON: both directions and the symmetric values.
+inline void expect_pc_error_json(const PcErrorCase& c, const nlohmann::json& j) {
+  for (const auto& [column, name] : pc_error_value_columns()) {
+    expect_pc_error_value(c, "AB_" + column,
+                          json_feature(j["directions"]["ref_to_dist"]["features"], name));
+    expect_pc_error_value(c, "BA_" + column,
+                          json_feature(j["directions"]["dist_to_ref"]["features"], name));
+    expect_pc_error_value(c, "sym_" + column, json_feature(j["features"], name));
+  }
 }
 
 }  // namespace qm3d::test
