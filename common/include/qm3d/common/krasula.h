@@ -1,0 +1,111 @@
+// Krasula et al.'s analysis of objective metrics on pairs of stimuli (L. Krasula, K. Fliegel,
+// P. Le Callet, M. Klima, "On the accuracy of objective image and video quality models: New
+// methodology for performance evaluation", QoMEX 2016): AUC_DS (can the metric tell significantly
+// different pairs from similar ones?), AUC_BW (does it tell which of a different pair is
+// better?), C0 (the share of different pairs it orders correctly) and THR (the score difference
+// that 95 % of the similar pairs stay below), with DeLong's covariance of the AUCs (Sun & Xu's
+// fast algorithm, IEEE SPL 2014) and the tests between metrics.
+//
+// Numbers as krasuluk/AucPerformance (Metrics_performance.m, fastDeLong.m, @ 2821dc8) and
+// Netflix/vmaf (python/vmaf/core/perf_metric.py AucPerfMetric, python/vmaf/tools/sigproc.py,
+// @ f85a853) compute them; the conventions are in ../shared/data/reference/evaluation/README.md.
+//
+// Example:
+//   const qm3d::PairLabels pairs = qm3d::label_pairs_j149(mos, sd, n);
+//   const qm3d::KrasulaResult r = qm3d::krasula_analysis({psnr, ssim}, pairs);
+//   // r.metrics[1].auc_bw, r.comparisons[0].p_delong_bw ...
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace qm3d {
+
+/// Pairs of stimuli with their subjective outcome: label +1 = `first` is significantly better
+/// than `second`, -1 = significantly worse, 0 = not significantly different.
+struct PairLabels {
+  std::vector<std::size_t> first, second;  ///< stimulus indices
+  std::vector<int> label;
+  /// How the labels were made, for the output ("J.149 one-sided 95 % z test on MOS, SD, n").
+  std::string rule;
+  std::size_t size() const { return label.size(); }
+  void add(std::size_t a, std::size_t b, int l) {
+    first.push_back(a);
+    second.push_back(b);
+    label.push_back(l);
+  }
+};
+
+/// Krasula's labels from per-stimulus MOS, standard deviation and observer count
+/// (Example_preprocess_and_calculate_performance.m; ITU-T J.149 style): for a pair,
+/// z = (MOS_first - MOS_second) / SE with SE = sqrt(SD_first^2 / n_first + SD_second^2 / n_second)
+/// (1e-6 where SE = 0), label = sign(MOS difference) when 1/2 + erf(|z| / sqrt 2) / 2 >= 0.95
+/// (a one-sided 95 % test), else 0. Pairs: every unordered pair once, as (first, second) =
+/// (j, i) for j > i ordered by j then i (the order of the VMAF test vectors); with `groups`
+/// (one value per stimulus) only pairs within a group (the BASICS intra-source track).
+/// @throws std::invalid_argument  lengths differ, fewer than 2 stimuli, a non-finite value, a
+///                                negative SD or n < 2
+PairLabels label_pairs_j149(const std::vector<double>& mos, const std::vector<double>& sd,
+                            const std::vector<double>& n,
+                            const std::vector<std::string>& groups = {});
+
+/// Labels from each stimulus' individual scores as VMAF's AucPerfMetric makes them: every
+/// ordered pair (i, j) of the N stimuli, the N self-pairs included (N^2 pairs, row-major),
+/// z = (mean_i - mean_j) / sqrt(var_i / n_i + var_j / n_j) (var with N - 1; denominator 1e-8
+/// where it is 0), label +1 for z > 2, -1 for z < -2, else 0. With `groups`, pairs outside a
+/// group are left out.
+/// @throws std::invalid_argument  fewer than 2 stimuli, a stimulus with fewer than 2 scores, a
+///                                non-finite score
+PairLabels label_pairs_raw(const std::vector<std::vector<double>>& scores,
+                           const std::vector<std::string>& groups = {});
+
+/// One metric's results. Differences are d = score(first) - score(second), the scores oriented
+/// higher = better (a distortion is negated by the caller).
+struct KrasulaMetric {
+  double auc_ds = 0;  ///< Mann-Whitney AUC of |d| on different pairs against similar ones
+  double auc_bw = 0;  ///< AUC of B = d * label (different pairs) against W = -B
+  double c0 = 0;      ///< #{B > 0} / #different (a zero difference counts as wrong)
+  /// 95th percentile of |d| over the similar pairs: numpy's default rule (linear, position
+  /// (n - 1) p; VMAF) and MATLAB's prctile (Hazen: x_(k) at p = (k - 0.5) / n; Krasula).
+  double thr_numpy = 0, thr_prctile = 0;
+  double se_ds = 0, se_bw = 0;  ///< DeLong standard errors (square roots of the diagonals)
+};
+
+/// A test between two metrics.
+struct KrasulaComparison {
+  std::size_t a = 0, b = 0;  ///< metric indices, a < b
+  double cov_ds = 0, cov_bw = 0;  ///< DeLong covariances of the two metrics' AUCs
+  /// DeLong's test: z = |AUC_a - AUC_b| / sqrt(C_aa + C_bb - 2 C_ab), p = 2 (1 - Phi(z)).
+  double z_delong_ds = 0, p_delong_ds = 1, z_delong_bw = 0, p_delong_bw = 1;
+  /// C0's two-proportion (binomial) test: pbar = (C0_a + C0_b) / 2,
+  /// z = |C0_a - C0_b| / sqrt(pbar (1 - pbar) 2 / L) with L = 2 #different, p two-sided.
+  double z_c0 = 0, p_c0 = 1;
+};
+
+struct KrasulaResult {
+  std::size_t different = 0;  ///< pairs labelled +1 or -1
+  std::size_t better = 0;     ///< labelled +1
+  std::size_t similar = 0;    ///< labelled 0
+  std::vector<KrasulaMetric> metrics;
+  std::vector<KrasulaComparison> comparisons;  ///< every a < b, in order (0,1), (0,2), ...
+  /// DeLong covariance matrices (metrics x metrics, row-major).
+  std::vector<double> cov_ds, cov_bw;
+};
+
+/// The analysis of `differences[m][p]` (metric m, pair p: d = score(first) - score(second),
+/// higher = better) against `labels[p]`.
+/// With fewer than 2 similar pairs the DS values (AUC_DS, its SE and tests, THR) are NaN.
+/// @throws std::invalid_argument  lengths differ, a non-finite difference, a label other than
+///                                -1, 0, 1, or fewer than 2 different pairs
+KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differences,
+                               const std::vector<int>& labels);
+
+/// The same from per-stimulus scores (`scores[m][i]`, oriented higher = better) and the pairs.
+KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
+                               const PairLabels& pairs);
+
+/// 2 (1 - Phi(|z|)) without cancellation (erfc): tiny but non-zero where 1 - Phi underflows.
+double two_sided_normal_p(double z);
+
+}  // namespace qm3d
