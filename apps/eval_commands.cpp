@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "eval_plot.h"
+#include "eval_protocol.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/evaluation_io.h"
@@ -294,6 +295,7 @@ void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& 
 }
 
 int run_eval(const EvalCommandOptions& o, bool quiet) {
+  if (needs_protocol(o)) return run_eval_protocol(o, quiet);
   check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
   const EvalData d = load_eval_data(o);
   warn_partial_join(d, quiet);
@@ -329,7 +331,9 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_option("--scores-key", o.scores_key,
                   "Stimulus column of SCORES (default: 'distorted' if present, else the first)");
   cmd->add_option("--scores-column", o.scores_column,
-                  "Score column of SCORES (default: 'score', else the other column of two)");
+                  "Score column(s) of SCORES: NAME, NAME1,NAME2,... (compared side by side) or "
+                  "'all' (every numeric column); default: 'score', else the other column of "
+                  "two. A batch file of several metrics gives one column per metric");
   cmd->add_option("--mos-key", o.mos_key, "Stimulus column of MOS (default: the first)");
   cmd->add_option("--mos-column", o.mos_column,
                   "MOS column of MOS (default: 'mos' in any case, else the other column of two)");
@@ -345,6 +349,27 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "distortion); reported, and a warning when the scores rank the other way")
       ->check(CLI::IsMember({"auto", "distortion", "quality"}))
       ->capture_default_str();
+  cmd->add_option("--lower-is-better", o.lower_is_better,
+                  "Score columns that are distortions, for Krasula's analysis (registered "
+                  "metrics are oriented by themselves; other columns are taken as qualities)")
+      ->delimiter(',')
+      ->allow_extra_args(false);
+  cmd->add_option("--sd-column", o.sd_column,
+                  "Column of MOS with each stimulus' standard deviation of the opinion scores: "
+                  "pairs labelled by Krasula's 95% z test (with --n-column, or n from "
+                  "--ci-column) and his AUC analysis run");
+  cmd->add_option("--n-column", o.n_column, "Column of MOS with each stimulus' observer count");
+  cmd->add_option("--raw", o.raw,
+                  "CSV of individual scores (stimulus, observer, score): pairs labelled as VMAF "
+                  "does (|z| > 2, every ordered pair) for Krasula's analysis")
+      ->type_name("FILE");
+  cmd->add_option("--pairs", o.pairs,
+                  "CSV of labelled pairs (first, second, label: 1 first better, -1 worse, 0 "
+                  "similar) for Krasula's analysis")
+      ->type_name("FILE");
+  cmd->add_option("--group-column", o.group_column,
+                  "Column of MOS (e.g. the source model): only pairs within a group are "
+                  "labelled (the BASICS intra-source track)");
   cmd->add_option("--bootstrap", o.bootstrap,
                   "Bootstrap replicates for the 95% intervals (0 = none; at most " +
                       std::to_string(kMaxBootstrapReplicates) + ")")

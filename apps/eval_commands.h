@@ -22,6 +22,12 @@ struct EvalCommandOptions {
   std::string ci_column;      ///< MOS 95% CI half-widths; enables the outlier ratio
   bool stem = false;          ///< match keys by file stem
   std::string orientation = "auto";  ///< auto, distortion, quality
+  std::vector<std::string> lower_is_better;  ///< series that are distortions (Krasula)
+  // Krasula's pair labels: from SD and n (or CI) of the MOS file, raw scores, or given.
+  std::string sd_column, n_column;  ///< MOS columns
+  std::string raw;                  ///< long format: stimulus, observer, score
+  std::string pairs;                ///< first, second, label
+  std::string group_column;         ///< MOS column: only pairs within a group
   std::size_t bootstrap = 1000;
   std::uint64_t seed = 1;
   bool json = false, csv = false;

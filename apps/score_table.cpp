@@ -49,7 +49,6 @@ bool is_missing(const std::string& cell) {
   return cell.empty() || cell == "nan" || cell == "NaN" || cell == "NA";
 }
 
-std::string stem_of(const std::string& key) { return std::filesystem::path(key).stem().string(); }
 
 std::string joined_names(const std::vector<std::string>& names) {
   std::string out;
@@ -76,6 +75,8 @@ std::map<std::string, std::size_t> index_keys(const CsvTable& t, std::size_t col
 }
 
 }  // namespace
+
+std::string stem_of(const std::string& key) { return std::filesystem::path(key).stem().string(); }
 
 CsvTable read_csv_table(const std::filesystem::path& path) {
   CsvTable t;

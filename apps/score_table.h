@@ -59,6 +59,9 @@ struct KeyList {
   std::string examples() const;  ///< "a, b, c" or "a, b, c, d, e, ..." (more than shown)
 };
 
+/// A key's file stem ("/data/p01_r1.ply" -> "p01_r1"), as --stem compares keys.
+std::string stem_of(const std::string& key);
+
 /// The rows of two tables that share a key.
 struct JoinedRows {
   std::vector<std::string> keys;         ///< in the order of the left table

@@ -1,0 +1,543 @@
+#include "eval_protocol.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "commands.h"
+#include "qm3d/common/error.h"
+#include "qm3d/common/evaluation_protocol.h"
+#include "qm3d/common/file_io.h"
+#include "qm3d/common/result_io.h"
+#include "qm3d/common/version.h"
+#include "score_table.h"
+
+namespace qm3d::app {
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+constexpr double kConfidence = 0.95;
+/// z of a two-sided 95 % normal interval: CI half-width = 1.96 SD / sqrt(n).
+constexpr double kZ95 = 1.959963984540054;
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+// ---- the score series ----------------------------------------------------------------------
+
+/// One metric's column: its table (the SCORES file, or its rows of one metric), the column, the
+/// join with MOS.
+struct Series {
+  std::string name;
+  const CsvTable* table = nullptr;
+  std::size_t column = 0;
+  std::string metric;  ///< the registered metric the rows name, or empty
+  const JoinedRows* join = nullptr;
+};
+
+/// The SCORES rows of each metric of its `metric` column, when it names several (batch results
+/// of several metrics: one row per pair and metric); empty otherwise.
+std::vector<std::pair<std::string, CsvTable>> split_by_metric(const CsvTable& t) {
+  const auto column = find_column(t, "metric");
+  if (!column) return {};
+  std::vector<std::pair<std::string, CsvTable>> parts;
+  std::map<std::string, std::size_t> at;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const std::string& m = t.rows[r][*column];
+    auto [it, added] = at.emplace(m, parts.size());
+    if (added) parts.push_back({m, CsvTable{t.path, t.header, {}, {}}});
+    parts[it->second].second.rows.push_back(t.rows[r]);
+    parts[it->second].second.line_numbers.push_back(t.line_numbers[r]);
+  }
+  if (parts.size() < 2) return {};
+  return parts;
+}
+
+// Every column whose joined cells are all numbers (or empty), but the key, the metric name and
+// what batch results hold besides scores.
+std::vector<std::size_t> numeric_columns(const CsvTable& t, std::size_t key) {
+  std::vector<std::size_t> out;
+  for (std::size_t c = 0; c < t.header.size(); ++c) {
+    const std::string& h = t.header[c];
+    if (c == key || h == "reference" || h == "distorted" || h == "metric" || h == "status" ||
+        h == "error" || h == "seconds" || h == "settings" ||
+        h.find("bbox_max_side") != std::string::npos) {
+      continue;
+    }
+    bool numeric = true, any = false;
+    for (std::size_t r = 0; r < t.rows.size() && numeric; ++r) {
+      try {
+        any = cell_number(t, r, c, true).has_value() || any;
+      } catch (const FormatError&) {
+        numeric = false;
+      }
+    }
+    if (numeric && any) out.push_back(c);
+  }
+  return out;
+}
+
+// The orientation of a series: --lower-is-better, --orientation, the registered metric its rows
+// name (asked about the column), a column named after a registered metric or one of its named
+// values; else assumed higher = better (Krasula's convention), and said so.
+void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
+  const auto& lower = o.lower_is_better;
+  if (std::find(lower.begin(), lower.end(), s.name) != lower.end()) {
+    m.higher_is_better = false;
+    m.orientation_source = "--lower-is-better";
+    return;
+  }
+  if (o.orientation != "auto") {
+    m.higher_is_better = o.orientation == "quality";
+    m.orientation_source = "--orientation";
+    return;
+  }
+  const std::string& column = s.table->header[s.column];
+  if (const MetricSpec* spec = s.metric.empty() ? nullptr : registry().find(s.metric)) {
+    if (const auto h = spec->column_higher_is_better(column)) {
+      m.higher_is_better = *h;
+      m.orientation_source = "metric column: " + s.metric;
+      return;
+    }
+  }
+  if (const MetricSpec* spec = registry().find(column)) {
+    m.higher_is_better = spec->higher_is_better;
+    m.orientation_source = "registered metric " + spec->name;
+    return;
+  }
+  for (const MetricSpec& spec : registry().metrics()) {
+    if (const auto h = spec.column_higher_is_better(column); h && column != "score") {
+      m.higher_is_better = *h;
+      m.orientation_source = "named value of " + spec.name;
+      return;
+    }
+  }
+  m.higher_is_better = true;
+  m.orientation_source = "assumed (not a registered metric; --lower-is-better " + s.name +
+                         " for a distortion)";
+}
+
+// The metric every row of a table names in its metric column, or empty.
+std::string single_metric(const CsvTable& t) {
+  const auto column = find_column(t, "metric");
+  if (!column || t.rows.empty()) return "";
+  const std::string& first = t.rows[0][*column];
+  for (const auto& row : t.rows) {
+    if (row[*column] != first) return "";
+  }
+  return first;
+}
+
+// ---- the subjective data -------------------------------------------------------------------
+
+/// What the MOS file and the extra files say of the kept stimuli.
+struct Stimuli {
+  std::vector<std::string> keys;
+  std::vector<std::size_t> mos_rows;  ///< row of each in the MOS table
+};
+
+double required_number(const CsvTable& t, std::size_t row, std::size_t column,
+                       const std::string& what) {
+  const auto v = cell_number(t, row, column);
+  if (!v) {
+    throw FormatError(t.path + ":" + std::to_string(t.line_numbers[row]) + ": column \"" +
+                      t.header[column] + "\": no " + what + " (every stimulus needs one for the "
+                      "pair labels)");
+  }
+  return *v;
+}
+
+// Krasula's labels from SD and n (or n from the CI half-widths: n = (1.96 SD / CI)^2).
+PairLabels pairs_from_sd(const CsvTable& mos, std::size_t mos_column, const Stimuli& st,
+                         const EvalCommandOptions& o, const std::vector<std::string>& groups) {
+  const std::size_t sd_c = require_column(mos, o.sd_column, "--sd-column");
+  const auto n_c = o.n_column.empty() ? std::nullopt
+                                      : std::optional(require_column(mos, o.n_column, "--n-column"));
+  const auto ci_c = o.ci_column.empty() ? std::nullopt
+                                        : std::optional(require_column(mos, o.ci_column, "--ci-column"));
+  if (!n_c && !ci_c) {
+    throw InputError("--sd-column needs the observer counts: --n-column, or --ci-column (n = "
+                     "(1.96 SD / CI)^2)");
+  }
+  std::vector<double> m, sd, n;
+  for (std::size_t row : st.mos_rows) {
+    m.push_back(required_number(mos, row, mos_column, "MOS"));
+    sd.push_back(required_number(mos, row, sd_c, "standard deviation"));
+    if (n_c) {
+      n.push_back(required_number(mos, row, *n_c, "observer count"));
+    } else {
+      const double ci = required_number(mos, row, *ci_c, "confidence interval");
+      n.push_back(ci > 0 ? std::pow(kZ95 * sd.back() / ci, 2) : 0.0);
+    }
+    const std::string where = mos.path + ":" + std::to_string(mos.line_numbers[row]);
+    if (sd.back() < 0) throw FormatError(where + ": a negative standard deviation");
+    if (!(n.back() >= 2)) {
+      throw FormatError(where + ": " + std::to_string(n.back()) +
+                        " observers; Krasula's labels need n >= 2");
+    }
+  }
+  return label_pairs_j149(m, sd, n, groups);
+}
+
+// Labels from a long-format file of individual scores: stimulus, observer, score (by name or
+// the first and last columns).
+PairLabels pairs_from_raw(const EvalCommandOptions& o, const Stimuli& st,
+                          const std::vector<std::string>& groups) {
+  const CsvTable raw = read_csv_table(o.raw);
+  const std::size_t key = find_column(raw, "stimulus").value_or(0);
+  const std::size_t score = find_column(raw, "score").value_or(raw.header.size() - 1);
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < st.keys.size(); ++i) index[st.keys[i]] = i;
+  std::vector<std::vector<double>> scores(st.keys.size());
+  for (std::size_t r = 0; r < raw.rows.size(); ++r) {
+    const std::string k = o.stem ? stem_of(raw.rows[r][key]) : raw.rows[r][key];
+    const auto it = index.find(k);
+    if (it == index.end()) {
+      throw FormatError(raw.path + ":" + std::to_string(raw.line_numbers[r]) + ": stimulus \"" +
+                        raw.rows[r][key] + "\" is not among the evaluated stimuli");
+    }
+    const auto v = cell_number(raw, r, score);
+    if (!v) {
+      throw FormatError(raw.path + ":" + std::to_string(raw.line_numbers[r]) +
+                        ": an empty score");
+    }
+    scores[it->second].push_back(*v);
+  }
+  for (std::size_t i = 0; i < scores.size(); ++i) {
+    if (scores[i].size() < 2) {
+      throw FormatError(raw.path + ": stimulus \"" + st.keys[i] + "\" has " +
+                        std::to_string(scores[i].size()) + " individual scores; at least 2 needed");
+    }
+  }
+  return label_pairs_raw(scores, groups);
+}
+
+// Given labels: first, second, label (+1 first better, -1 worse, 0 similar).
+PairLabels pairs_from_file(const EvalCommandOptions& o, const Stimuli& st) {
+  const CsvTable t = read_csv_table(o.pairs);
+  if (t.header.size() < 3) {
+    throw FormatError(t.path + ": expected the columns first, second, label");
+  }
+  const std::size_t a = find_column(t, "first").value_or(0);
+  const std::size_t b = find_column(t, "second").value_or(1);
+  const std::size_t l = find_column(t, "label").value_or(2);
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < st.keys.size(); ++i) index[st.keys[i]] = i;
+  PairLabels pairs;
+  pairs.rule = "given (" + t.path + ")";
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const std::string where = t.path + ":" + std::to_string(t.line_numbers[r]);
+    std::size_t ij[2];
+    for (int k = 0; k < 2; ++k) {
+      const std::string& cell = t.rows[r][k == 0 ? a : b];
+      const auto it = index.find(o.stem ? stem_of(cell) : cell);
+      if (it == index.end()) {
+        throw FormatError(where + ": stimulus \"" + cell + "\" is not among the evaluated stimuli");
+      }
+      ij[k] = it->second;
+    }
+    const auto label = cell_number(t, r, l);
+    if (!label || (*label != -1 && *label != 0 && *label != 1)) {
+      throw FormatError(where + ": the label must be 1 (first better), -1 or 0");
+    }
+    pairs.add(ij[0], ij[1], static_cast<int>(*label));
+  }
+  return pairs;
+}
+
+// ---- output --------------------------------------------------------------------------------
+
+std::string fixed(const ordered_json& v, const char* spec = "%.4f") {
+  if (!v.is_number()) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, spec, v.get<double>());
+  return buf;
+}
+
+std::string cell(const ordered_json& statistic) {
+  std::string s = fixed(statistic["value"]);
+  if (statistic["ci95"].is_array()) {
+    s += " [" + fixed(statistic["ci95"][0]) + ", " + fixed(statistic["ci95"][1]) + "]";
+  }
+  return s;
+}
+
+// A table printed with each column as wide as its widest cell.
+class TextTable {
+ public:
+  void row(std::vector<std::string> cells) { rows_.push_back(std::move(cells)); }
+  void print(std::ostream& out) const {
+    std::vector<std::size_t> width;
+    for (const auto& r : rows_) {
+      width.resize(std::max(width.size(), r.size()));
+      for (std::size_t c = 0; c < r.size(); ++c) width[c] = std::max(width[c], r[c].size());
+    }
+    for (const auto& r : rows_) {
+      std::string line;
+      for (std::size_t c = 0; c < r.size(); ++c) {
+        const std::string pad(width[c] - r[c].size(), ' ');
+        line += c == 0 ? r[c] + pad : "  " + pad + r[c];
+      }
+      out << line << "\n";
+    }
+  }
+
+ private:
+  std::vector<std::vector<std::string>> rows_;
+};
+
+std::string protocol_text(const ordered_json& j, const std::vector<std::string>& names) {
+  std::ostringstream out;
+  out << j["stimuli"].get<std::size_t>() << " stimuli; metrics: ";
+  for (std::size_t i = 0; i < names.size(); ++i) out << (i ? ", " : "") << names[i];
+  out << "\n";
+  TextTable t;
+  std::vector<std::string> cells = {""};
+  cells.insert(cells.end(), names.begin(), names.end());
+  t.row(cells);
+  cells = {"orientation"};
+  for (const auto& n : names) {
+    cells.push_back(j["metrics"][n]["orientation"]["higher_is_better"].get<bool>() ? "quality"
+                                                                                    : "distortion");
+  }
+  t.row(cells);
+  const std::pair<const char*, const char*> stats[] = {
+      {"plcc", "PLCC"},
+      {"srocc", "SROCC"},
+      {"krocc", "KROCC"},
+      {"plcc_mapped", "PLCC (logistic)"},
+      {"rmse_mapped", "RMSE (logistic)"},
+      {"outlier_ratio", "outlier ratio"}};
+  for (const auto& [key, label] : stats) {
+    if (!j["metrics"][names[0]]["statistics"].contains(key)) continue;
+    cells = {label};
+    for (const auto& n : names) cells.push_back(cell(j["metrics"][n]["statistics"][key]));
+    t.row(cells);
+  }
+  if (!j["krasula"].is_null()) {
+    const std::pair<const char*, const char*> ks[] = {
+        {"auc_ds", "AUC_DS"}, {"auc_bw", "AUC_BW"}, {"c0", "C0"}, {"thr", "THR"}};
+    for (const auto& [key, label] : ks) {
+      cells = {label};
+      for (const auto& n : names) cells.push_back(fixed(j["metrics"][n]["krasula"][key], "%.6g"));
+      t.row(cells);
+    }
+  }
+  t.print(out);
+  if (!j["krasula"].is_null()) {
+    const auto& k = j["krasula"];
+    out << "Krasula: " << k["different"].get<std::size_t>() << " different ("
+        << k["better"].get<std::size_t>() << " first better), " << k["similar"].get<std::size_t>()
+        << " similar of " << k["pairs"].get<std::size_t>() << " pairs; labels: "
+        << k["rule"].get<std::string>() << "\n";
+  }
+  if (!j["comparisons"].empty()) {
+    out << "comparisons (two-sided p):\n";
+    TextTable c;
+    c.row({"  a", "b", "test", "statistic", "p"});
+    for (const auto& x : j["comparisons"]) {
+      c.row({"  " + x["a"].get<std::string>(), x["b"].get<std::string>(),
+             x["test"].get<std::string>(), fixed(x["statistic"], "%.4f"), fixed(x["p"], "%.3g")});
+    }
+    c.print(out);
+  }
+  return out.str();
+}
+
+std::string csv_number(const ordered_json& v) {
+  return v.is_number() ? format_double(v.get<double>()) : "";
+}
+
+std::string protocol_csv(const ordered_json& j, const std::vector<std::string>& names) {
+  std::ostringstream out;
+  out << "metric,versus,statistic,value,ci95_low,ci95_high\n";
+  for (const auto& n : names) {
+    const auto& m = j["metrics"][n];
+    out << csv_field(n) << ",,stimuli," << j["stimuli"].get<std::size_t>() << ",,\n";
+    for (const auto& [key, s] : m["statistics"].items()) {
+      out << csv_field(n) << ",," << key << ',' << csv_number(s["value"]) << ','
+          << (s["ci95"].is_array() ? csv_number(s["ci95"][0]) + ',' + csv_number(s["ci95"][1])
+                                   : std::string(","))
+          << "\n";
+    }
+    if (!m["krasula"].is_null()) {
+      for (const auto& [key, v] : m["krasula"].items()) {
+        out << csv_field(n) << ",," << key << ',' << csv_number(v) << ",,\n";
+      }
+    }
+  }
+  for (const auto& c : j["comparisons"]) {
+    const std::string test = c["test"].get<std::string>();
+    const std::string ab = csv_field(c["a"].get<std::string>()) + ',' +
+                           csv_field(c["b"].get<std::string>()) + ',' + test;
+    out << ab << "_statistic," << csv_number(c["statistic"]) << ",,\n";
+    out << ab << "_p," << csv_number(c["p"]) << ",,\n";
+  }
+  return out.str();
+}
+
+void emit(const std::string& text, const std::string& output) {
+  if (output.empty()) {
+    std::cout << text << std::flush;
+    if (!std::cout) throw InputError("stdout: write failed");
+    return;
+  }
+  write_file_atomically(output, [&](std::ostream& out) { out << text; });
+}
+
+}  // namespace
+
+bool needs_protocol(const EvalCommandOptions& o) {
+  return o.scores_column.find(',') != std::string::npos || o.scores_column == "all" ||
+         !o.sd_column.empty() || !o.raw.empty() || !o.pairs.empty() ||
+         split_by_metric(read_csv_table(o.scores)).size() > 1;
+}
+
+int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
+  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}});
+  if (!o.plot.empty()) {
+    throw InputError("--plot draws one metric; give one --scores-column (several metrics: no plot "
+                     "yet)");
+  }
+  const int sources = !o.sd_column.empty() + !o.raw.empty() + !o.pairs.empty();
+  if (sources > 1) throw InputError("give one of --sd-column, --raw and --pairs");
+  const CsvTable scores = read_csv_table(o.scores);
+  const CsvTable mos = read_csv_table(o.mos);
+  const std::size_t key = key_column(scores, o.scores_key, "--scores-key");
+  const std::size_t mos_key = o.mos_key.empty() ? 0 : require_column(mos, o.mos_key, "--mos-key");
+  const std::size_t mos_value = value_column(mos, o.mos_column, {"mos"}, mos_key, "--mos-column");
+  const auto ci = o.ci_column.empty() ? std::nullopt
+                                      : std::optional(require_column(mos, o.ci_column, "--ci-column"));
+
+  // The tables of the series: SCORES, or its rows of each metric.
+  std::vector<std::pair<std::string, CsvTable>> parts = split_by_metric(scores);
+  if (parts.empty()) parts.push_back({single_metric(scores), scores});
+  const bool pivot = parts.size() > 1;
+  std::vector<JoinedRows> joins;
+  for (const auto& [metric, table] : parts) {
+    joins.push_back(join_on_key(table, key, mos, mos_key, o.stem));
+  }
+  std::vector<Series> series;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const CsvTable& t = parts[p].second;
+    std::vector<std::size_t> columns;
+    if (o.scores_column == "all") {
+      columns = numeric_columns(t, key);
+    } else if (o.scores_column.empty()) {
+      columns.push_back(value_column(t, "", {"score"}, key, "--scores-column"));
+    } else {
+      for (const std::string& c : split_list(o.scores_column)) {
+        columns.push_back(require_column(t, c, "--scores-column"));
+      }
+    }
+    for (std::size_t c : columns) {
+      const std::string& header = t.header[c];
+      std::string name = header;
+      if (pivot) name = header == "score" ? parts[p].first : parts[p].first + ":" + header;
+      series.push_back({name, &t, c, parts[p].first, &joins[p]});
+    }
+  }
+  if (series.empty()) throw FormatError(o.scores + ": no numeric score column");
+
+  // The stimuli every series and the MOS have a finite value for, in the first series' order.
+  std::vector<std::map<std::string, double>> values(series.size());
+  KeyList left_out;
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    const JoinedRows& j = *series[s].join;
+    for (std::size_t i = 0; i < j.keys.size(); ++i) {
+      const auto v = cell_number(*series[s].table, j.left[i], series[s].column, true);
+      if (v && std::isfinite(*v)) values[s][j.keys[i]] = *v;
+    }
+  }
+  std::map<std::string, std::size_t> mos_row;
+  for (std::size_t i = 0; i < joins[0].keys.size(); ++i) mos_row[joins[0].keys[i]] = joins[0].right[i];
+  for (std::size_t p = 1; p < joins.size(); ++p) {
+    for (std::size_t i = 0; i < joins[p].keys.size(); ++i) mos_row.emplace(joins[p].keys[i], joins[p].right[i]);
+  }
+  Stimuli st;
+  SubjectiveData subjective;
+  std::vector<std::string> candidates;
+  for (const auto& j : joins) {
+    for (const std::string& k : j.keys) {
+      if (std::find(candidates.begin(), candidates.end(), k) == candidates.end()) candidates.push_back(k);
+    }
+  }
+  for (const std::string& k : candidates) {
+    const std::size_t row = mos_row.at(k);
+    const auto m = cell_number(mos, row, mos_value);
+    const auto c = ci ? cell_number(mos, row, *ci) : std::optional<double>(0);
+    bool all = m && c;
+    for (const auto& v : values) all = all && v.count(k);
+    if (!all) {
+      left_out.add(k);
+      continue;
+    }
+    st.keys.push_back(k);
+    st.mos_rows.push_back(row);
+    subjective.mos.push_back(*m);
+    if (ci) subjective.ci95.push_back(*c);
+  }
+  if (st.keys.empty()) {
+    throw FormatError("no stimulus in common between " + o.scores + " and " + o.mos +
+                      " with a value of every metric");
+  }
+  if (!quiet && left_out.count) {
+    std::cerr << "qm3d: warning: " << left_out.count
+              << " stimuli left out (a metric's score empty, NaN or infinite, or no MOS): "
+              << left_out.examples() << "\n";
+  }
+  std::vector<std::string> groups;
+  if (!o.group_column.empty()) {
+    const std::size_t g = require_column(mos, o.group_column, "--group-column");
+    for (std::size_t row : st.mos_rows) groups.push_back(mos.rows[row][g]);
+  }
+  if (!o.sd_column.empty()) subjective.pairs = pairs_from_sd(mos, mos_value, st, o, groups);
+  if (!o.raw.empty()) subjective.pairs = pairs_from_raw(o, st, groups);
+  if (!o.pairs.empty()) subjective.pairs = pairs_from_file(o, st);
+
+  std::vector<MetricScores> metrics;
+  std::vector<std::string> names;
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    MetricScores m;
+    m.name = series[s].name;
+    for (const std::string& k : st.keys) m.scores.push_back(values[s].at(k));
+    orient(series[s], o, m);
+    names.push_back(m.name);
+    metrics.push_back(std::move(m));
+  }
+  ProtocolOptions options;
+  options.evaluation.bootstrap = o.bootstrap;
+  options.evaluation.seed = o.seed;
+  options.evaluation.confidence = kConfidence;
+  ordered_json j = {{"command", "eval"}, {"version", kVersion}};
+  j["scores"] = {{"file", scores.path}, {"key", scores.header[key]}, {"rows", scores.rows.size()}};
+  j["mos"] = {{"file", mos.path},
+              {"key", mos.header[mos_key]},
+              {"column", mos.header[mos_value]},
+              {"ci_column", ci ? ordered_json(mos.header[*ci]) : ordered_json()},
+              {"rows", mos.rows.size()}};
+  j["key_match"] = o.stem ? "file stem" : "exact";
+  j["left_out"] = {{"count", left_out.count}, {"first", left_out.first}};
+  j.update(evaluate_metrics(metrics, subjective, options));
+  j["bootstrap"] = {{"replicates", o.bootstrap},
+                    {"seed", o.seed},
+                    {"confidence", kConfidence},
+                    {"method", "percentile; stimuli resampled with replacement; mapping refitted"}};
+  emit(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
+       o.output);
+  return 0;
+}
+
+}  // namespace qm3d::app

@@ -1,0 +1,119 @@
+#include "qm3d/common/evaluation_protocol.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "qm3d/common/evaluation_io.h"
+
+namespace qm3d {
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+ordered_json number(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(); }
+
+ordered_json statistics_json(const EvaluationResult& r) {
+  ordered_json s = {{"plcc", statistic_json(r.plcc)},
+                    {"srocc", statistic_json(r.srocc)},
+                    {"krocc", statistic_json(r.krocc)},
+                    {"plcc_mapped", statistic_json(r.plcc_logistic)},
+                    {"rmse_mapped", statistic_json(r.rmse_logistic)}};
+  if (r.outlier_ratio) s["outlier_ratio"] = statistic_json(*r.outlier_ratio);
+  return s;
+}
+
+ordered_json krasula_metric_json(const KrasulaMetric& m, const KrasulaResult& r) {
+  return {{"auc_ds", number(m.auc_ds)},
+          {"auc_bw", number(m.auc_bw)},
+          {"c0", number(m.c0)},
+          {"thr", number(m.thr_numpy)},
+          {"thr_prctile", number(m.thr_prctile)},
+          {"se_ds", number(m.se_ds)},
+          {"se_bw", number(m.se_bw)},
+          {"different", r.different},
+          {"similar", r.similar}};
+}
+
+ordered_json comparison(const std::string& a, const std::string& b, const char* test, double z,
+                        double p) {
+  return {{"a", a}, {"b", b}, {"test", test}, {"statistic", number(z)}, {"p", number(p)}};
+}
+
+}  // namespace
+
+ProtocolResult run_protocol(const std::vector<MetricScores>& metrics,
+                            const SubjectiveData& subjective, const ProtocolOptions& options) {
+  if (metrics.empty()) throw std::invalid_argument("evaluation: no metric");
+  for (std::size_t i = 0; i < metrics.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (metrics[i].name == metrics[j].name) {
+        throw std::invalid_argument("evaluation: metric \"" + metrics[i].name + "\" given twice");
+      }
+    }
+  }
+  ProtocolResult r;
+  for (const MetricScores& m : metrics) {
+    r.evaluations.push_back(
+        evaluate_scores(m.scores, subjective.mos, subjective.ci95, options.evaluation));
+  }
+  if (subjective.pairs) {
+    // Krasula's differences are oriented higher = better: a distortion's scores are negated.
+    std::vector<std::vector<double>> oriented;
+    for (const MetricScores& m : metrics) {
+      oriented.push_back(m.scores);
+      if (!m.higher_is_better) {
+        for (double& s : oriented.back()) s = -s;
+      }
+    }
+    r.krasula = krasula_analysis(oriented, *subjective.pairs);
+  }
+  return r;
+}
+
+ordered_json protocol_json(const std::vector<MetricScores>& metrics,
+                           const SubjectiveData& subjective, const ProtocolResult& r) {
+  ordered_json out;
+  out["stimuli"] = subjective.mos.size();
+  ordered_json per_metric = ordered_json::object();
+  for (std::size_t i = 0; i < metrics.size(); ++i) {
+    const EvaluationResult& e = r.evaluations[i];
+    ordered_json j;
+    j["orientation"] = {{"higher_is_better", metrics[i].higher_is_better},
+                        {"from", metrics[i].orientation_source}};
+    j["statistics"] = statistics_json(e);
+    j["mapping"] = logistic_json(e.fit);
+    j["mapping"]["name"] = "logistic4";
+    j["bootstrap"] = {{"replicates", e.bootstrap_replicates}, {"used", e.bootstrap_used}};
+    j["krasula"] =
+        r.krasula ? krasula_metric_json(r.krasula->metrics[i], *r.krasula) : ordered_json();
+    per_metric[metrics[i].name] = std::move(j);
+  }
+  out["metrics"] = std::move(per_metric);
+  out["krasula"] = nullptr;
+  out["comparisons"] = ordered_json::array();
+  if (r.krasula) {
+    const KrasulaResult& k = *r.krasula;
+    out["krasula"] = {{"rule", subjective.pairs->rule},
+                      {"pairs", subjective.pairs->size()},
+                      {"different", k.different},
+                      {"better", k.better},
+                      {"similar", k.similar},
+                      {"orientation", "differences of scores oriented higher = better (a "
+                                      "distortion's negated)"}};
+    for (const KrasulaComparison& c : k.comparisons) {
+      const std::string& a = metrics[c.a].name;
+      const std::string& b = metrics[c.b].name;
+      out["comparisons"].push_back(comparison(a, b, "delong_auc_ds", c.z_delong_ds, c.p_delong_ds));
+      out["comparisons"].push_back(comparison(a, b, "delong_auc_bw", c.z_delong_bw, c.p_delong_bw));
+      out["comparisons"].push_back(comparison(a, b, "c0", c.z_c0, c.p_c0));
+    }
+  }
+  return out;
+}
+
+ordered_json evaluate_metrics(const std::vector<MetricScores>& metrics,
+                              const SubjectiveData& subjective, const ProtocolOptions& options) {
+  return protocol_json(metrics, subjective, run_protocol(metrics, subjective, options));
+}
+
+}  // namespace qm3d
