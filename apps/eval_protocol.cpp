@@ -112,17 +112,10 @@ void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
       return;
     }
   }
-  if (const MetricSpec* spec = registry().find(column)) {
-    m.higher_is_better = spec->higher_is_better;
-    m.orientation_source = "registered metric " + spec->name;
+  if (const auto h = registry().column_orientation(column)) {
+    m.higher_is_better = h->first;
+    m.orientation_source = h->second;
     return;
-  }
-  for (const MetricSpec& spec : registry().metrics()) {
-    if (const auto h = spec.column_higher_is_better(column); h && column != "score") {
-      m.higher_is_better = *h;
-      m.orientation_source = "named value of " + spec.name;
-      return;
-    }
   }
   m.higher_is_better = true;
   m.orientation_source = "assumed (not a registered metric; --lower-is-better " + s.name +

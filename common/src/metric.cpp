@@ -476,6 +476,20 @@ const MetricSpec& Registry::get(const std::string& name) const {
   throw FormatError("unknown metric '" + name + "' (expected " + known + ")");
 }
 
+std::optional<std::pair<bool, std::string>> Registry::column_orientation(
+    const std::string& column) const {
+  if (const MetricSpec* spec = find(column)) {
+    return std::make_pair(spec->higher_is_better, "registered metric " + spec->name);
+  }
+  if (column == "score") return std::nullopt;  // every metric's: says nothing alone
+  for (const MetricSpec& spec : metrics_) {
+    if (const auto h = spec.column_higher_is_better(column)) {
+      return std::make_pair(*h, "named value of " + spec.name);
+    }
+  }
+  return std::nullopt;
+}
+
 std::vector<const MetricSpec*> Registry::applicable(const Input& reference,
                                                     const Input& distorted) const {
   std::vector<const MetricSpec*> out;

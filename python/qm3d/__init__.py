@@ -506,33 +506,92 @@ def sample(mesh, points=None, density=None, seed=1):
     return {"positions": p, "colors": c}
 
 
-def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1):
-    """Agreement of objective scores with subjective ones, as ``qm3d eval``: PLCC, SROCC, KROCC,
-    PLCC and RMSE after the logistic mapping, and the outlier ratio when `ci95` is given, each
-    with a 95% bootstrap interval (stimuli resampled, the logistic refitted).
+def _finite(name, a):
+    if not _np.all(_np.isfinite(a)):
+        raise ValueError(f"{name}: NaN or infinite values")
+    return a
+
+
+def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, raw=None,
+             pairs=None, groups=None, lower_is_better=(), orientation="auto"):
+    """Agreement of objective scores with subjective ones, as ``qm3d eval``.
+
+    One metric (`scores` a sequence, no pair data): PLCC, SROCC, KROCC, PLCC and RMSE after the
+    logistic mapping, and the outlier ratio when `ci95` is given, each with a 95% bootstrap
+    interval (stimuli resampled, the logistic refitted).
+
+    Several metrics (`scores` a dict {name: sequence}, or a pandas DataFrame), or any pair data:
+    the same per metric side by side, plus Krasula's AUC analysis and the tests between metrics
+    when pairs can be labelled — from `sd` and `n` (per-stimulus standard deviation and observer
+    count: Krasula's one-sided 95% z test), from `raw` (a sequence per stimulus of its individual
+    scores: VMAF's |z| > 2 rule on every ordered pair) or given as `pairs` ((first, second,
+    label) triples of stimulus indices, label 1 = first better, -1 worse, 0 similar); `groups`
+    (one value per stimulus) keeps the pairs within a group. Registered metrics' names (and their
+    named values, e.g. ``d1_mse``) give their orientation; others are taken as qualities unless
+    named in `lower_is_better` (or `orientation` = "quality" / "distortion" for all).
 
     Args:
-        scores, mos: sequences of the same length (NaN pairs are an error; drop them first).
-        ci95: optional per-stimulus 95% confidence half-widths of the MOS.
-        bootstrap: replicates (0 = no intervals).
-        seed: the bootstrap's seed.
+        scores: a sequence, or a dict / DataFrame of sequences, of the same length as `mos`.
+        mos: subjective scores; ci95: optional 95% CI half-widths of the MOS.
+        bootstrap, seed: replicates (0 = no intervals) and the seed.
 
     Returns:
-        dict: stimuli, statistics {name: {value, ci95: [low, high] or None}}, logistic {beta1..4,
-        rmse, converged, bounded}, bootstrap {replicates, used, seed, confidence}.
+        dict. One metric: stimuli, statistics {name: {value, ci95}}, logistic, bootstrap.
+        Several: stimuli, metrics {NAME: {orientation, statistics {plcc, srocc, krocc,
+        plcc_mapped, rmse_mapped[, outlier_ratio]}, mapping, bootstrap, krasula {auc_ds, auc_bw,
+        c0, thr, thr_prctile, se_ds, se_bw, different, similar} or None}}, krasula {rule, pairs,
+        different, better, similar} or None, comparisons [{a, b, test, statistic, p}].
     """
-    s = _np.asarray(scores, dtype=float).ravel()
-    m = _np.asarray(mos, dtype=float).ravel()
-    c = _np.asarray(ci95 if ci95 is not None else [], dtype=float).ravel()
-    if s.size != m.size:
-        raise ValueError(f"scores and mos: {s.size} scores but {m.size} MOS values")
-    if c.size not in (0, s.size):
-        raise ValueError(f"ci95: {c.size} values for {s.size} stimuli")
-    for name, a in (("scores", s), ("mos", m), ("ci95", c)):
-        if not _np.all(_np.isfinite(a)):
-            raise ValueError(f"{name}: NaN or infinite values")
-    return _json.loads(_qm3d.evaluate(s.tolist(), m.tolist(), c.tolist(), int(bootstrap),
-                                      int(seed)))
+    m = _finite("mos", _np.asarray(mos, dtype=float).ravel())
+    c = _finite("ci95", _np.asarray(ci95 if ci95 is not None else [], dtype=float).ravel())
+    if c.size not in (0, m.size):
+        raise ValueError(f"ci95: {c.size} values for {m.size} stimuli")
+    several = isinstance(scores, dict) or hasattr(scores, "columns")
+    if not several and sd is None and raw is None and pairs is None:
+        s = _finite("scores", _np.asarray(scores, dtype=float).ravel())
+        if s.size != m.size:
+            raise ValueError(f"scores and mos: {s.size} scores but {m.size} MOS values")
+        return _json.loads(_qm3d.evaluate(s.tolist(), m.tolist(), c.tolist(), int(bootstrap),
+                                          int(seed)))
+    if not several:
+        scores = {"score": scores}
+    names = [str(k) for k in scores.keys()] if isinstance(scores, dict) else [str(k) for k in scores.columns]
+    series = []
+    for name in names:
+        s = _finite(f"scores[{name!r}]", _np.asarray(scores[name], dtype=float).ravel())
+        if s.size != m.size:
+            raise ValueError(f"scores[{name!r}]: {s.size} scores but {m.size} MOS values")
+        series.append(s.tolist())
+    if sum(x is not None for x in (sd, raw, pairs)) > 1:
+        raise ValueError("give one of sd (with n), raw and pairs")
+    labels, sdv, nv, rawv, first, second, label = "", [], [], [], [], [], []
+    if sd is not None:
+        if n is None:
+            raise ValueError("sd needs n (the observer count of each stimulus)")
+        sdv = _finite("sd", _np.asarray(sd, dtype=float).ravel()).tolist()
+        nv = _finite("n", _np.asarray(n, dtype=float).ravel()).tolist()
+        if len(sdv) != m.size or len(nv) != m.size:
+            raise ValueError(f"sd and n: one value per stimulus ({m.size}) needed")
+        labels = "sd"
+    elif raw is not None:
+        rawv = [_finite(f"raw[{i}]", _np.asarray(r, dtype=float).ravel()).tolist() for i, r in enumerate(raw)]
+        if len(rawv) != m.size:
+            raise ValueError(f"raw: {len(rawv)} stimuli for {m.size} MOS values")
+        labels = "raw"
+    elif pairs is not None:
+        for k, (a, b, l) in enumerate(pairs):
+            if not (0 <= int(a) < m.size and 0 <= int(b) < m.size) or int(l) not in (-1, 0, 1):
+                raise ValueError(f"pairs[{k}]: stimulus indices 0..{m.size - 1} and a label -1, 0 or 1 needed")
+            first.append(int(a)); second.append(int(b)); label.append(int(l))
+        labels = "pairs"
+    g = [str(x) for x in groups] if groups is not None else []
+    if g and len(g) != m.size:
+        raise ValueError(f"groups: {len(g)} values for {m.size} stimuli")
+    if orientation not in ("auto", "quality", "distortion"):
+        raise ValueError("orientation: auto, quality or distortion")
+    return _json.loads(_qm3d.evaluate_metrics(
+        names, series, [str(x) for x in lower_is_better], orientation, m.tolist(), c.tolist(),
+        labels, sdv, nv, rawv, first, second, label, g, int(bootstrap), int(seed)))
 
 
 def load_model(path):

@@ -2,6 +2,7 @@
 // metric with its options), inputs (files recognised by content, or numpy arrays copied once),
 // run() with the GIL released, and the results. The pure-Python layer (python/qm3d/__init__.py)
 // turns these into qm3d.cmdm(), qm3d.pcqm(), ... with the tool's names and defaults.
+#include <algorithm>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -15,6 +16,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/evaluation_io.h"
+#include "qm3d/common/evaluation_protocol.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/model_io.h"
 #include "qm3d/common/result_io.h"
@@ -417,6 +419,59 @@ PYBIND11_MODULE(_qm3d, m) {
         return j.dump();
       },
       py::arg("scores"), py::arg("mos"), py::arg("ci95"), py::arg("bootstrap"), py::arg("seed"));
+
+  m.def(
+      "evaluate_metrics",
+      [](const std::vector<std::string>& names, const std::vector<std::vector<double>>& scores,
+         const std::vector<std::string>& lower_is_better, const std::string& orientation,
+         const std::vector<double>& mos, const std::vector<double>& ci95,
+         const std::string& labels, const std::vector<double>& sd, const std::vector<double>& n,
+         const std::vector<std::vector<double>>& raw, const std::vector<std::size_t>& first,
+         const std::vector<std::size_t>& second, const std::vector<int>& label,
+         const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed) {
+        std::vector<MetricScores> metrics;
+        for (std::size_t i = 0; i < names.size(); ++i) {
+          MetricScores ms{names[i], scores.at(i), true, ""};
+          const auto& lower = lower_is_better;
+          const auto known = registry().column_orientation(names[i]);
+          if (std::find(lower.begin(), lower.end(), names[i]) != lower.end()) {
+            ms.higher_is_better = false;
+            ms.orientation_source = "lower_is_better";
+          } else if (orientation != "auto") {
+            ms.higher_is_better = orientation == "quality";
+            ms.orientation_source = "orientation";
+          } else if (known) {
+            ms.higher_is_better = known->first;
+            ms.orientation_source = known->second;
+          } else {
+            ms.orientation_source = "assumed (not a registered metric; lower_is_better=[\"" +
+                                    names[i] + "\"] for a distortion)";
+          }
+          metrics.push_back(std::move(ms));
+        }
+        SubjectiveData subjective{mos, ci95, std::nullopt};
+        if (labels == "sd") subjective.pairs = label_pairs_j149(mos, sd, n, groups);
+        if (labels == "raw") subjective.pairs = label_pairs_raw(raw, groups);
+        if (labels == "pairs") {
+          PairLabels p;
+          p.rule = "given";
+          for (std::size_t k = 0; k < label.size(); ++k) p.add(first.at(k), second.at(k), label[k]);
+          subjective.pairs = std::move(p);
+        }
+        ProtocolOptions o;
+        o.evaluation.bootstrap = bootstrap;
+        o.evaluation.seed = seed;
+        nlohmann::ordered_json j;
+        {
+          py::gil_scoped_release release;
+          j = evaluate_metrics(metrics, subjective, o);
+        }
+        return j.dump();
+      },
+      py::arg("names"), py::arg("scores"), py::arg("lower_is_better"), py::arg("orientation"),
+      py::arg("mos"), py::arg("ci95"), py::arg("labels"), py::arg("sd"), py::arg("n"),
+      py::arg("raw"), py::arg("first"), py::arg("second"), py::arg("label"), py::arg("groups"),
+      py::arg("bootstrap"), py::arg("seed"));
 
   // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
   // finish their current stage on their own threads; they must be gone before Python is.

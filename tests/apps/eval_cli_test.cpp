@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -240,6 +241,192 @@ TEST_F(EvalCli, OrientationFromTheMetricColumnOrTheOption) {
   ASSERT_EQ(unknown.code, 0) << unknown.err;
   EXPECT_TRUE(json::parse(unknown.out)["orientation"]["higher_is_better"].is_null());
   EXPECT_EQ(qm3d(base + " --orientation up").code, 1);
+}
+
+// ---- several metrics, Krasula's analysis -----------------------------------------------------
+
+fs::path evaluation_dir() { return test::reference_dir() / "evaluation"; }
+
+// The reference CSVs of ../shared/data/reference/evaluation as rows of named cells.
+std::vector<std::map<std::string, std::string>> reference_rows(const std::string& name) {
+  std::ifstream in(evaluation_dir() / name);
+  std::string line;
+  std::getline(in, line);
+  const auto split = [](const std::string& l) {
+    std::vector<std::string> cells(1);
+    bool quoted = false;
+    for (char c : l) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) cells.emplace_back();
+      else cells.back() += c;
+    }
+    return cells;
+  };
+  const std::vector<std::string> header = split(line);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    const auto cells = split(line);
+    std::map<std::string, std::string> r;
+    for (std::size_t c = 0; c < header.size() && c < cells.size(); ++c) r[header[c]] = cells[c];
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+void expect_rel(double got, double expected, double tol, const std::string& what) {
+  EXPECT_NEAR(got, expected, tol * std::fabs(expected)) << what;
+}
+
+// Every per-metric and pairwise value VMAF's code gives on the Toyama vector, from the tool's
+// JSON of m1..m5 against the table's MOS, SD and n.
+void expect_toyama_vmaf_values(const json& j) {
+  EXPECT_EQ(j["krasula"]["different"], 11121);
+  EXPECT_EQ(j["krasula"]["similar"], 2907);
+  for (const auto& e : reference_rows("toyama_vmaf_computed_per_metric.csv")) {
+    const json& k = j["metrics"]["m" + e.at("metric")]["krasula"];
+    const std::string id = "m" + e.at("metric");
+    expect_rel(k["auc_ds"], std::stod(e.at("AUC_DS")), 1e-12, id + " AUC_DS");
+    expect_rel(k["auc_bw"], std::stod(e.at("AUC_BW")), 1e-12, id + " AUC_BW");
+    expect_rel(k["c0"], std::stod(e.at("CC_0")), 1e-12, id + " C0");
+    expect_rel(k["thr"], std::stod(e.at("THR_numpy")), 1e-12, id + " THR");
+    expect_rel(k["thr_prctile"], std::stod(e.at("THR_prctile")), 1e-12, id + " THR_prctile");
+    expect_rel(k["se_ds"], std::stod(e.at("SE_DS_DeLong")), 1e-12, id + " SE_DS");
+    expect_rel(k["se_bw"], std::stod(e.at("SE_BW_DeLong")), 1e-12, id + " SE_BW");
+  }
+  std::map<std::string, double> p;
+  for (const json& c : j["comparisons"]) {
+    p[c["a"].get<std::string>() + c["b"].get<std::string>() + c["test"].get<std::string>()] =
+        c["p"].is_null() ? NAN : c["p"].get<double>();
+  }
+  EXPECT_EQ(p.size(), 30u);
+  for (const auto& e : reference_rows("toyama_vmaf_computed_pairwise.csv")) {
+    if (e.at("metric_a") == e.at("metric_b")) continue;
+    const std::string ab = "m" + e.at("metric_a") + "m" + e.at("metric_b");
+    EXPECT_NEAR(p.at(ab + "delong_auc_ds"), std::stod(e.at("pDS_DL")), 1e-9) << ab;
+    EXPECT_NEAR(p.at(ab + "delong_auc_bw"), std::stod(e.at("pBW_DL")), 1e-9) << ab;
+    EXPECT_NEAR(p.at(ab + "c0"), std::stod(e.at("pCC0_b")), 1e-9) << ab;
+  }
+}
+
+TEST_F(EvalCli, KrasulaOnTheToyamaVectorsFromMosSdAndN) {
+  const std::string table = (evaluation_dir() / "toyama_stimuli_5metrics.csv").string();
+  const CliRun r = qm3d("eval " + table + " " + table +
+                        " --scores-key stimulus --scores-column m1,m2,m3,m4,m5 --mos-column MOS "
+                        "--sd-column SD --n-column n --bootstrap 0 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["stimuli"], 168);
+  expect_toyama_vmaf_values(j);
+  EXPECT_NE(j["metrics"]["m1"]["orientation"]["from"].get<std::string>().find("assumed"),
+            std::string::npos);
+  // The same labels given as a file of pairs (VMAF's signif): the same values.
+  std::string pairs = "first,second,label\n";
+  for (const auto& e : reference_rows("toyama_vmaf_pairs.csv")) {
+    pairs += e.at("first") + "," + e.at("second") + "," + e.at("signif") + "\n";
+  }
+  const fs::path pf = file("pairs.csv", pairs);
+  const CliRun given = qm3d("eval " + table + " " + table +
+                            " --scores-key stimulus --scores-column m1,m2,m3,m4,m5 --mos-column "
+                            "MOS --pairs " + pf.string() + " --bootstrap 0 --json");
+  ASSERT_EQ(given.code, 0) << given.err;
+  expect_toyama_vmaf_values(json::parse(given.out));
+  // Text and CSV carry the same analysis.
+  const CliRun text = qm3d("eval " + table + " " + table +
+                           " --scores-key stimulus --scores-column m1,m2 --mos-column MOS "
+                           "--sd-column SD --n-column n --bootstrap 0");
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("Krasula: 11121 different (5520 first better), 2907 similar of 14028"),
+            std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("0.595422"), std::string::npos) << text.out;
+  const CliRun csv = qm3d("eval " + table + " " + table +
+                          " --scores-key stimulus --scores-column m1,m2 --mos-column MOS "
+                          "--sd-column SD --n-column n --bootstrap 0 --csv");
+  ASSERT_EQ(csv.code, 0) << csv.err;
+  EXPECT_NE(csv.out.find("m1,,auc_ds,0.5954217774044879"), std::string::npos) << csv.out;
+  EXPECT_NE(csv.out.find("m1,m2,delong_auc_ds_p,"), std::string::npos) << csv.out;
+}
+
+// VMAF's raw-score test from a long-format file of individual scores.
+TEST_F(EvalCli, KrasulaFromIndividualScoresAsVmaf) {
+  std::string scores = "stimulus,a,b\n", raw = "stimulus,observer,score\n", mos = "stimulus,mos\n";
+  for (const auto& e : reference_rows("vmaf_rawscore_vector.csv")) {
+    scores += e.at("stimulus") + "," + e.at("prediction_a") + "," + e.at("prediction_b") + "\n";
+    double sum = 0;
+    for (int k = 1; k <= 10; ++k) {
+      raw += e.at("stimulus") + ",o" + std::to_string(k) + "," + e.at("score" + std::to_string(k)) + "\n";
+      sum += std::stod(e.at("score" + std::to_string(k)));
+    }
+    mos += e.at("stimulus") + "," + exact(sum / 10) + "\n";
+  }
+  // Five stimuli are needed for the logistic fit: a fifth, far better one.
+  scores += "5,5,5\n";
+  mos += "5,9\n";
+  for (int k = 1; k <= 10; ++k) raw += "5,o" + std::to_string(k) + "," + std::to_string(9 + 0.01 * k) + "\n";
+  const fs::path s = file("scores.csv", scores), r = file("raw.csv", raw), m = file("mos.csv", mos);
+  const CliRun run = qm3d("eval " + s.string() + " " + m.string() + " --scores-column a,b --raw " +
+                          r.string() + " --bootstrap 0 --json");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json j = json::parse(run.out);
+  EXPECT_EQ(j["krasula"]["pairs"], 25);  // every ordered pair, self-pairs included
+  EXPECT_GT(j["metrics"]["a"]["krasula"]["auc_bw"].get<double>(),
+            j["metrics"]["b"]["krasula"]["auc_bw"].get<double>());
+  // Unknown stimuli in the raw file are an error naming the file and line.
+  const fs::path bad = file("bad_raw.csv", raw + "9,o1,3\n");
+  const CliRun unknown = qm3d("eval " + s.string() + " " + m.string() +
+                              " --scores-column a,b --raw " + bad.string() + " --bootstrap 0");
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_NE(unknown.err.find(bad.string() + ":52: stimulus \"9\" is not among the evaluated"),
+            std::string::npos)
+      << unknown.err;
+}
+
+// Batch results of several metrics: one series per metric, oriented by the registry.
+TEST_F(EvalCli, BatchFileOfSeveralMetricsIsOneColumnPerMetric) {
+  std::string batch = "reference,distorted,metric,score,status\n";
+  std::string mos = "distorted,mos,sd,n\n";
+  const double q[] = {1.1, 1.9, 3.2, 3.8, 4.4, 4.9};
+  for (int k = 0; k < 6; ++k) {
+    const std::string d = "s" + std::to_string(k) + ".ply";
+    batch += "r.ply," + d + ",pcqm," + exact(0.05 - 0.008 * k + 0.001 * (k % 2)) + ",ok\n";
+    batch += "r.ply," + d + ",psnr," + exact(20 + 4 * k - 0.5 * (k % 3)) + ",ok\n";
+    mos += d + "," + exact(q[k]) + ",0.6,20\n";
+  }
+  const fs::path b = file("results.csv", batch), m = file("mos.csv", mos);
+  const CliRun run = qm3d("eval " + b.string() + " " + m.string() +
+                          " --sd-column sd --n-column n --bootstrap 0 --json");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json j = json::parse(run.out);
+  EXPECT_EQ(j["metrics"]["pcqm"]["orientation"]["higher_is_better"], false);
+  EXPECT_EQ(j["metrics"]["psnr"]["orientation"]["higher_is_better"], true);
+  EXPECT_EQ(j["metrics"]["psnr"]["orientation"]["from"], "metric column: psnr");
+  // Oriented, both order the different pairs rightly.
+  EXPECT_EQ(j["metrics"]["pcqm"]["krasula"]["c0"], 1.0);
+  EXPECT_EQ(j["metrics"]["psnr"]["krasula"]["c0"], 1.0);
+  EXPECT_LT(j["metrics"]["pcqm"]["statistics"]["srocc"]["value"].get<double>(), 0);
+
+  // Bad subjective data: an SD missing, n < 2, a bad label.
+  std::string no_sd = mos;
+  no_sd.replace(no_sd.find(",0.6,20\n"), 8, ",,20\n");
+  const fs::path m1 = file("no_sd.csv", no_sd);
+  const CliRun missing = qm3d("eval " + b.string() + " " + m1.string() +
+                              " --sd-column sd --n-column n --bootstrap 0");
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find(m1.string() + ":2: column \"sd\": no standard deviation"),
+            std::string::npos)
+      << missing.err;
+  std::string one = mos;
+  one.replace(one.find(",0.6,20\n"), 8, ",0.6,1\n");
+  const fs::path m2 = file("one.csv", one);
+  const CliRun few = qm3d("eval " + b.string() + " " + m2.string() +
+                          " --sd-column sd --n-column n --bootstrap 0");
+  EXPECT_EQ(few.code, 2);
+  EXPECT_NE(few.err.find(m2.string() + ":2: 1.000000 observers"), std::string::npos) << few.err;
+  const fs::path p = file("p.csv", "first,second,label\ns1.ply,s0.ply,2\n");
+  const CliRun label = qm3d("eval " + b.string() + " " + m.string() + " --pairs " + p.string() +
+                            " --bootstrap 0");
+  EXPECT_EQ(label.code, 2);
+  EXPECT_NE(label.err.find(p.string() + ":2: the label must be 1"), std::string::npos) << label.err;
 }
 
 TEST_F(EvalCli, BadInputIsOneLineNamingTheFileAndColumn) {

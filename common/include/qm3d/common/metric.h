@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "qm3d/common/reading.h"
@@ -206,6 +207,10 @@ class Registry {
   const std::vector<MetricSpec>& metrics() const { return metrics_; }
   /// The metrics that apply to the pair, in registration order (what `compare` runs).
   std::vector<const MetricSpec*> applicable(const Input& reference, const Input& distorted) const;
+  /// Whether a higher number in a score column named `column` is better, and why: a column
+  /// named after a registered metric ("psnr": true) or after one of a metric's named values
+  /// ("d1_mse": false, "dist_to_ref_c0_psnr": true); nullopt for other names.
+  std::optional<std::pair<bool, std::string>> column_orientation(const std::string& column) const;
   /// The first metric that applies (registration order: CMDM for two meshes, PCQM otherwise).
   const MetricSpec& auto_metric(const Input& reference, const Input& distorted) const;
 
