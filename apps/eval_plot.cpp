@@ -251,6 +251,62 @@ void write_png(const fs::path& path, const ScatterPlot& p) {
 
 }  // namespace
 
+void write_auc_plot(const fs::path& path, const AucPlot& p) {
+  const std::size_t n = p.names.size();
+  if (n == 0 || p.auc_ds.size() != n || p.auc_bw.size() != n || p.se_ds.size() != n ||
+      p.se_bw.size() != n) {
+    throw std::invalid_argument("AUC plot: no metric, or values of different lengths");
+  }
+  const double x0 = kLeft, x1 = kWidth - kRight, y0 = kHeight - kBottom, y1 = kTop;
+  const auto py = [&](double auc) {
+    return y0 - (std::clamp(auc, 0.5, 1.0) - 0.5) / 0.5 * (y0 - y1);
+  };
+  const double slot = (x1 - x0) / static_cast<double>(n), bar = slot * 0.3;
+  std::ostringstream out;
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
+      << "width=\"" << kWidth << "\" height=\"" << kHeight << "\" viewBox=\"0 0 " << kWidth << " "
+      << kHeight << "\" font-family=\"sans-serif\" font-size=\"13\">\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      << "<rect x=\"" << x0 << "\" y=\"" << y1 << "\" width=\"" << x1 - x0 << "\" height=\""
+      << y0 - y1 << "\" fill=\"none\" stroke=\"black\"/>\n";
+  for (int k = 0; k <= 5; ++k) {
+    const double v = 0.5 + 0.1 * k;
+    const std::string y = format("%.2f", py(v));
+    out << "<line x1=\"" << x0 - kTickLength << "\" y1=\"" << y << "\" x2=\"" << x1 << "\" y2=\""
+        << y << "\" stroke=\"#ddd\"/><text x=\"" << x0 - 8 << "\" y=\"" << y
+        << "\" text-anchor=\"end\" dominant-baseline=\"middle\">" << format("%.1f", v)
+        << "</text>\n";
+  }
+  const char* colours[2] = {kPointColour, kCurveColour};
+  for (std::size_t m = 0; m < n; ++m) {
+    const double centre = x0 + slot * (static_cast<double>(m) + 0.5);
+    const double values[2] = {p.auc_ds[m], p.auc_bw[m]}, errors[2] = {p.se_ds[m], p.se_bw[m]};
+    for (int b = 0; b < 2; ++b) {
+      if (!std::isfinite(values[b])) continue;
+      const double left = centre + (b == 0 ? -bar : 0.0), top = py(values[b]);
+      out << "<rect x=\"" << format("%.2f", left) << "\" y=\"" << format("%.2f", top)
+          << "\" width=\"" << format("%.2f", bar * 0.95) << "\" height=\"" << format("%.2f", y0 - top)
+          << "\" fill=\"" << colours[b] << "\" fill-opacity=\"0.7\"/>\n";
+      const double mid = left + bar * 0.475, lo = py(values[b] - 1.96 * errors[b]),
+                   hi = py(values[b] + 1.96 * errors[b]);
+      out << "<line x1=\"" << format("%.2f", mid) << "\" y1=\"" << format("%.2f", lo) << "\" x2=\""
+          << format("%.2f", mid) << "\" y2=\"" << format("%.2f", hi) << "\" stroke=\"black\"/>\n";
+    }
+    out << "<text x=\"" << format("%.2f", centre) << "\" y=\"" << y0 + 20
+        << "\" text-anchor=\"middle\">" << markup_escaped(p.names[m]) << "</text>\n";
+  }
+  out << "<text transform=\"translate(20," << (y0 + y1) / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">AUC (0.5 = chance)</text>\n"
+      << "<text x=\"" << kWidth / 2 << "\" y=\"28\" text-anchor=\"middle\" font-weight=\"bold\">"
+      << markup_escaped(p.title) << "</text>\n"
+      << "<text x=\"" << x1 - 4 << "\" y=\"" << kHeight - 18 << "\" text-anchor=\"end\"><tspan fill=\""
+      << kPointColour << "\">&#9632; AUC_DS (different vs similar)</tspan>  <tspan fill=\""
+      << kCurveColour << "\">&#9632; AUC_BW (better vs worse)</tspan>; bars: 95 % DeLong intervals</text>\n"
+      << "</svg>\n";
+  const std::string svg = out.str();
+  write_file_atomically(path, [&](std::ostream& o) { o << svg; });
+}
+
 void write_scatter_plot(const fs::path& path, const ScatterPlot& plot) {
   if (plot.x.empty() || plot.x.size() != plot.y.size()) {
     throw std::invalid_argument("scatter plot: no points, or x and y of different lengths");

@@ -1,6 +1,8 @@
 #include "eval_protocol.h"
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -10,6 +12,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "eval_plot.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/evaluation_protocol.h"
 #include "qm3d/common/file_io.h"
@@ -21,6 +24,7 @@ namespace qm3d::app {
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
+namespace fs = std::filesystem;
 
 constexpr double kConfidence = 0.95;
 /// z of a two-sided 95 % normal interval: CI half-width = 1.96 SD / sqrt(n).
@@ -390,6 +394,52 @@ void emit(const std::string& text, const std::string& output) {
   write_file_atomically(output, [&](std::ostream& out) { out << text; });
 }
 
+// A metric's name as part of a file name.
+std::string file_part(const std::string& name) {
+  std::string out;
+  for (char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' ? c : '_';
+  return out;
+}
+
+// --plot FILE.svg|png: FILE-NAME.svg|png, a scatter per metric, and with Krasula's analysis
+// FILE-auc.svg, the AUC summary (always SVG).
+void plot_protocol(const std::string& path, const std::vector<MetricScores>& metrics,
+                   const SubjectiveData& subjective, const ordered_json& j,
+                   const std::string& mos_label) {
+  const fs::path base(path);
+  const auto sibling = [&](const std::string& part, const std::string& ext) {
+    return base.parent_path() / (base.stem().string() + "-" + file_part(part) + ext);
+  };
+  AucPlot auc;
+  for (const MetricScores& m : metrics) {
+    const ordered_json& mj = j["metrics"][m.name];
+    const ordered_json& map = mj["mapping"];
+    ScatterPlot p{m.scores, subjective.mos,
+                  LogisticFunction{map["beta1"].get<double>(), map["beta2"].get<double>(),
+                                   map["beta3"].get<double>(), map["beta4"].get<double>()},
+                  m.name + ": PLCC " + fixed(mj["statistics"]["plcc"]["value"], "%.3f") +
+                      ", SROCC " + fixed(mj["statistics"]["srocc"]["value"], "%.3f"),
+                  m.name, mos_label.empty() ? "MOS" : mos_label};
+    write_scatter_plot(sibling(m.name, base.extension().string()), p);
+    if (!mj["krasula"].is_null()) {
+      const auto v = [&](const char* k) {
+        return mj["krasula"][k].is_number() ? mj["krasula"][k].get<double>() : NAN;
+      };
+      auc.names.push_back(m.name);
+      auc.auc_ds.push_back(v("auc_ds"));
+      auc.se_ds.push_back(v("se_ds"));
+      auc.auc_bw.push_back(v("auc_bw"));
+      auc.se_bw.push_back(v("se_bw"));
+    }
+  }
+  if (!auc.names.empty()) {
+    auc.title = "Krasula's AUCs (" + std::to_string(j["krasula"]["different"].get<std::size_t>()) +
+                " different, " + std::to_string(j["krasula"]["similar"].get<std::size_t>()) +
+                " similar pairs)";
+    write_auc_plot(sibling("auc", ".svg"), auc);
+  }
+}
+
 }  // namespace
 
 bool needs_protocol(const EvalCommandOptions& o) {
@@ -399,11 +449,7 @@ bool needs_protocol(const EvalCommandOptions& o) {
 }
 
 int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
-  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}});
-  if (!o.plot.empty()) {
-    throw InputError("--plot draws one metric; give one --scores-column (several metrics: no plot "
-                     "yet)");
-  }
+  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
   const int sources = !o.sd_column.empty() + !o.raw.empty() + !o.pairs.empty();
   if (sources > 1) throw InputError("give one of --sd-column, --raw and --pairs");
   const CsvTable scores = read_csv_table(o.scores);
@@ -528,6 +574,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
                     {"seed", o.seed},
                     {"confidence", kConfidence},
                     {"method", "percentile; stimuli resampled with replacement; mapping refitted"}};
+  if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, j, o.mos_column);
   emit(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
        o.output);
   return 0;
