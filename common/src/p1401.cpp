@@ -275,16 +275,28 @@ CubicCandidate best_double_root(const std::vector<double>& t, const std::vector<
   double best_sum = std::numeric_limits<double>::infinity();
   for (int i = 0; i < kDoubleRootScan; ++i) {
     const double s = fit_double_root(t, y, t0_at(i)).sum_squares;
-    if (s < best_sum) best_sum = s, best = i;
+    if (s < best_sum) {
+      best_sum = s;
+      best = i;
+    }
   }
+  auto profile = [&](double t0) { return fit_double_root(t, y, t0).sum_squares; };
   double a = t0_at(std::max(best - 1, 0)), b = t0_at(std::min(best + 1, kDoubleRootScan - 1));
   double p = a + kGolden * (b - a), q = b - kGolden * (b - a);
-  double fp = fit_double_root(t, y, p).sum_squares, fq = fit_double_root(t, y, q).sum_squares;
+  double fp = profile(p), fq = profile(q);
   for (int iteration = 0; iteration < 200 && b - a > 1e-14; ++iteration) {
-    if (fp <= fq) {
-      b = q, q = p, fq = fp, p = a + kGolden * (b - a), fp = fit_double_root(t, y, p).sum_squares;
-    } else {
-      a = p, p = q, fp = fq, q = b - kGolden * (b - a), fq = fit_double_root(t, y, q).sum_squares;
+    if (fp <= fq) {  // the minimum is in [a, q]: q <- p, new p
+      b = q;
+      q = p;
+      fq = fp;
+      p = a + kGolden * (b - a);
+      fp = profile(p);
+    } else {  // the minimum is in [p, b]: p <- q, new q
+      a = p;
+      p = q;
+      fp = fq;
+      q = b - kGolden * (b - a);
+      fq = profile(q);
     }
   }
   const CubicCandidate refined = fit_double_root(t, y, 0.5 * (a + b));
@@ -359,7 +371,7 @@ Standardised standardise(const std::vector<double>& v, const char* what) {
   return s;
 }
 
-// b1 (sigma(b2 (u - b3)) - 1/2) + b4 u + b5, which is the P.1401 / VQEG form since
+// b1 (sigma(b2 (u - b3)) - 1/2) + b4 u + b5, which is the VQEG FR-TV Phase I / LIVE form since
 // 1/2 - 1/(1 + e^z) = sigma(z) - 1/2.
 double logistic5(const double* b, double u) {
   return b[0] * (detail::logistic_sigmoid(b[1] * (u - b[2])) - 0.5) + b[3] * u + b[4];
@@ -479,16 +491,6 @@ Statistic rmse_with_interval(double sum_squares, std::size_t dof) {
                          rmse * std::sqrt(k / chi_square_quantile(0.025, k))}};
 }
 
-Statistic plcc_with_interval(const std::vector<double>& predicted, const std::vector<double>& mos) {
-  Statistic s{pearson(predicted, mos), std::nullopt};
-  if (mos.size() > 3 && std::isfinite(s.value)) {
-    const double z = std::atanh(s.value);
-    const double half = kP1401Z95 / std::sqrt(static_cast<double>(mos.size() - 3));
-    s.ci = Interval{std::tanh(z - half), std::tanh(z + half)};
-  }
-  return s;
-}
-
 Statistic proportion_with_interval(double ratio, std::size_t n) {
   const double half = kP1401Z95 * std::sqrt(ratio * (1 - ratio) / static_cast<double>(n));
   return {ratio, Interval{std::max(0.0, ratio - half), std::min(1.0, ratio + half)}};
@@ -600,7 +602,8 @@ P1401Statistics p1401_statistics(const std::vector<double>& predicted,
   s.count = mos.size();
   s.parameter_count = parameter_count;
   s.degrees_of_freedom = s.count - parameter_count;
-  s.plcc = plcc_with_interval(predicted, mos);
+  s.plcc.value = pearson(predicted, mos);
+  s.plcc.ci = correlation_interval(s.plcc.value, s.count);
   double sum_squares = 0, sum_squares_star = 0;
   for (std::size_t i = 0; i < mos.size(); ++i) {
     const double error = std::fabs(mos[i] - predicted[i]);
@@ -618,6 +621,22 @@ P1401Statistics p1401_statistics(const std::vector<double>& predicted,
     s.outlier_ratio = proportion_with_interval(ratio, s.count);
   }
   return s;
+}
+
+std::optional<Interval> correlation_interval(double r, std::size_t n) {
+  if (n <= 3 || !std::isfinite(r)) return std::nullopt;
+  const double z = std::atanh(r);
+  const double half = kP1401Z95 / std::sqrt(static_cast<double>(n - 3));
+  return Interval{std::tanh(z - half), std::tanh(z + half)};
+}
+
+P1401Evaluation evaluate_p1401(const std::vector<double>& scores, const std::vector<double>& mos,
+                               Mapping mapping, const std::vector<double>& mos_ci95,
+                               const LogisticFitOptions& options) {
+  P1401Evaluation e;
+  e.fit = fit_mapping(scores, mos, mapping, options);
+  e.statistics = p1401_statistics(e.fit.predicted, mos, e.fit.parameter_count, mos_ci95);
+  return e;
 }
 
 double mos_ci95(double sd, std::size_t votes) {
@@ -682,6 +701,21 @@ SignificanceTest compare_outlier_ratios(double or1, std::size_t n1, double or2, 
   if (!(pooled > 0 && pooled < 1)) return {0, 1};
   const double z = (or1 - or2) / std::sqrt(pooled * (1 - pooled) * (1 / a + 1 / b));
   return {z, two_sided_normal_p(z)};
+}
+
+P1401Comparison compare_p1401(const P1401Statistics& a, const P1401Statistics& b) {
+  P1401Comparison c;
+  c.plcc = compare_correlations(a.plcc.value, a.count, b.plcc.value, b.count);
+  c.rmse = compare_rmse(a.rmse.value, a.degrees_of_freedom, b.rmse.value, b.degrees_of_freedom);
+  if (a.rmse_star && b.rmse_star) {
+    c.rmse_star = compare_rmse(a.rmse_star->value, a.degrees_of_freedom, b.rmse_star->value,
+                               b.degrees_of_freedom);
+  }
+  if (a.outlier_ratio && b.outlier_ratio) {
+    c.outlier_ratio =
+        compare_outlier_ratios(a.outlier_ratio->value, a.count, b.outlier_ratio->value, b.count);
+  }
+  return c;
 }
 
 // ---- public: distribution functions -----------------------------------------------------------

@@ -308,6 +308,13 @@ TEST(P1401Mapping, ConstrainedCubicAtAnEndpoint) {
   const MappingFit fit = fit_mapping(x, y, Mapping::cubic);
   EXPECT_TRUE(fit.constrained);
   expect_monotonic_over(fit.function, 0, 7, /*increasing=*/true);
+  // numpy least squares with f'(0) = 0 (columns 1, x^2, x^3): 0.261900049021198 at
+  // (1.6235655892816583, 0, 0.04330112712710538, 0.0038894355713673112), monotonic; scipy SLSQP
+  // under f'(x) >= 0 at 40001 points of [0, 7] finds the same point (0.26190004945, f'(0) = 5e-17).
+  EXPECT_NEAR(sum_squares(fit.predicted, y), 0.261900049021198, 1e-13);
+  const std::vector<double> expected = {1.6235655892816583, 0, 0.04330112712710538,
+                                        0.0038894355713673112};
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_NEAR(fit.function.parameters[k], expected[k], 1e-12);
   const MappingFit line = fit_mapping(x, y, Mapping::linear);
   EXPECT_LE(sum_squares(fit.predicted, y), sum_squares(line.predicted, y));
 }
@@ -459,6 +466,19 @@ TEST(P1401Statistics, MosConfidenceIntervalFromVotes) {
   EXPECT_THROW(mos_ci95(-0.5, 10), NumericError);
 }
 
+TEST(P1401Statistics, EvaluateIsFitThenStatistics) {
+  const P1401Evaluation e = evaluate_p1401(kScores, kMos, Mapping::cubic, kCi95);
+  const MappingFit fit = fit_mapping(kScores, kMos, Mapping::cubic);
+  const P1401Statistics s = p1401_statistics(fit.predicted, kMos, 4, kCi95);
+  EXPECT_EQ(e.fit.predicted, fit.predicted);
+  EXPECT_EQ(e.statistics.degrees_of_freedom, 6u);
+  EXPECT_EQ(e.statistics.rmse.value, s.rmse.value);
+  EXPECT_EQ(e.statistics.rmse_star->value, s.rmse_star->value);
+  EXPECT_EQ(e.statistics.plcc.ci->low, correlation_interval(s.plcc.value, 10)->low);
+  EXPECT_FALSE(correlation_interval(0.5, 3).has_value());
+  EXPECT_FALSE(correlation_interval(kNaN, 30).has_value());
+}
+
 // ---- significance tests -----------------------------------------------------------------------
 
 TEST(P1401Tests, FisherZOnCorrelations) {
@@ -503,6 +523,25 @@ TEST(P1401Tests, TwoProportionTestOnOutlierRatios) {
   EXPECT_EQ(compare_outlier_ratios(1, 20, 1, 30).p, 1);
   EXPECT_THROW(compare_outlier_ratios(0.3, 0, 0.1, 50), NumericError);
   EXPECT_THROW(compare_outlier_ratios(1.3, 10, 0.1, 50), NumericError);
+}
+
+TEST(P1401Tests, CompareTwoEvaluations) {
+  const P1401Statistics a = evaluate_p1401(kScores, kMos, Mapping::linear, kCi95).statistics;
+  std::vector<double> worse = kScores;
+  std::swap(worse[2], worse[7]);  // a model that misranks two stimuli
+  const P1401Statistics b = evaluate_p1401(worse, kMos, Mapping::linear, kCi95).statistics;
+  const P1401Comparison c = compare_p1401(a, b);
+  const SignificanceTest plcc = compare_correlations(a.plcc.value, 10, b.plcc.value, 10);
+  EXPECT_EQ(c.plcc.statistic, plcc.statistic);
+  EXPECT_GT(c.plcc.statistic, 0);  // a is the better model
+  EXPECT_EQ(c.rmse.p, compare_rmse(a.rmse.value, 8, b.rmse.value, 8).p);
+  ASSERT_TRUE(c.rmse_star && c.outlier_ratio);
+  EXPECT_EQ(c.rmse_star->statistic,
+            compare_rmse(a.rmse_star->value, 8, b.rmse_star->value, 8).statistic);
+  EXPECT_EQ(c.outlier_ratio->p,
+            compare_outlier_ratios(a.outlier_ratio->value, 10, b.outlier_ratio->value, 10).p);
+  const P1401Statistics no_ci = evaluate_p1401(worse, kMos, Mapping::linear).statistics;
+  EXPECT_FALSE(compare_p1401(a, no_ci).rmse_star.has_value());
 }
 
 }  // namespace

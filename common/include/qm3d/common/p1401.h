@@ -83,14 +83,16 @@ struct MappingFit {
 
 /// Least-squares fit of `mapping` from scores x to MOS y. Deterministic.
 ///  - linear: ordinary least squares.
-///  - cubic: least squares y ~ c0 + c1 t + c2 t^2 + c3 t^3 in t = (x - mid) / half in [-1, 1].
-///    When its derivative changes sign on [-1, 1], the least squares over the monotonic cubics
-///    (P.1401 §7.3.3 requires a monotonic mapping): the set of cubics with s f'(t) >= 0 on
-///    [-1, 1] (s = +1 or -1) is a convex cone, so the constrained optimum lies on its boundary,
-///    where f' vanishes at t = -1, at t = +1, at both, or doubly inside (f = c0 + k (t - t0)^3).
-///    Each of these families is solved by least squares (the last by a scan of t0 over 2001
-///    points of [-1, 1] refined by golden-section search), the candidates that are monotonic
-///    are kept, and the lowest sum of squares over both directions s wins.
+///  - cubic: least squares y ~ c0 + c1 t + c2 t^2 + c3 t^3 in t = (x - mid) / half in [-1, 1]
+///    (mid and half of the range of x). When its derivative changes sign on [-1, 1], the least
+///    squares over the monotonic cubics instead (P.1401 §7.3.3 requires a monotonic mapping).
+///    The cubics with s f'(t) >= 0 on [-1, 1] form a convex cone for s = +1 and for s = -1, so
+///    the constrained optimum lies on a cone's boundary, where f' vanishes at t = -1, at t = +1,
+///    at both (f' = 3 c3 (t^2 - 1)), or doubly inside (f = c0 + k (t - t0)^3, monotonic for every
+///    k). Each family is a linear least-squares problem (the last one for each t0: t0 is scanned
+///    over 2001 points of [-1, 1] and refined by golden-section search); the candidates that are
+///    monotonic are kept and the one with the least sum of squares wins. (The scan can miss a
+///    second, deeper local minimum of the residual in t0 only if it is narrower than 0.001.)
 ///  - logistic4: fit_logistic().
 ///  - logistic5: Levenberg-Marquardt on standardised data (as fit_logistic), started from the
 ///    logistic4 optimum (b4 = 0: the 5-parameter curve is then never worse than the 4-parameter
@@ -104,7 +106,7 @@ MappingFit fit_mapping(const std::vector<double>& x, const std::vector<double>& 
 
 // ---- statistics of one model (P.1401 §7.4, §7.5, §7.7) --------------------------------------
 
-/// Every value has an analytic 95 % interval in `ci` (Statistic::ci always set here).
+/// Each value with its analytic 95 % interval in `ci` (absent only for an undefined PLCC).
 struct P1401Statistics {
   std::size_t count = 0;               ///< N
   std::size_t parameter_count = 0;     ///< d
@@ -136,6 +138,21 @@ struct P1401Statistics {
 P1401Statistics p1401_statistics(const std::vector<double>& predicted,
                                  const std::vector<double>& mos, std::size_t parameter_count,
                                  const std::vector<double>& mos_ci95 = {});
+
+/// The P.1401 §7.5.3 interval of a Pearson correlation r over n pairs: tanh(atanh r -+ 1.96 /
+/// sqrt(n - 3)); absent when n <= 3 or r is NaN.
+std::optional<Interval> correlation_interval(double r, std::size_t n);
+
+/// A mapping fitted to one model's scores and the statistics of its predictions.
+struct P1401Evaluation {
+  MappingFit fit;
+  P1401Statistics statistics;
+};
+
+/// fit_mapping(scores, mos, mapping), then p1401_statistics(fit.predicted, mos, d, mos_ci95).
+P1401Evaluation evaluate_p1401(const std::vector<double>& scores, const std::vector<double>& mos,
+                               Mapping mapping, const std::vector<double>& mos_ci95 = {},
+                               const LogisticFitOptions& options = {});
 
 /// Half-width of the 95 % interval of one MOS from the standard deviation of its M votes
 /// (P.1401 §7.4): t(0.975, M - 1) sd / sqrt(M), t the Student quantile.
@@ -171,6 +188,19 @@ SignificanceTest compare_rmse(double rmse1, std::size_t dof1, double rmse2, std:
 /// 1/n2)), two-sided normal p. z = 0, p = 1 when the pooled proportion is 0 or 1.
 /// @throws NumericError  n1 or n2 = 0, a ratio outside [0, 1] or not finite
 SignificanceTest compare_outlier_ratios(double or1, std::size_t n1, double or2, std::size_t n2);
+
+/// Every P.1401 test between two models' statistics (computed on the same subjective data).
+struct P1401Comparison {
+  SignificanceTest plcc;                          ///< compare_correlations (§7.6.1)
+  SignificanceTest rmse;                          ///< compare_rmse (§7.6.4)
+  std::optional<SignificanceTest> rmse_star;      ///< compare_rmse on rmse* (§7.7)
+  std::optional<SignificanceTest> outlier_ratio;  ///< compare_outlier_ratios (§7.6.2)
+};
+
+/// The tests between `a` and `b` (statistics signed a - b); rmse_star and outlier_ratio when
+/// both have them.
+/// @throws NumericError  as the individual tests (e.g. N <= 3, or an undefined PLCC)
+P1401Comparison compare_p1401(const P1401Statistics& a, const P1401Statistics& b);
 
 // ---- distribution functions (for the intervals and tests above) ------------------------------
 
