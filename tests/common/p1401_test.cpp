@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -317,6 +318,43 @@ TEST(P1401Mapping, ConstrainedCubicAtAnEndpoint) {
   for (std::size_t k = 0; k < 4; ++k) EXPECT_NEAR(fit.function.parameters[k], expected[k], 1e-12);
   const MappingFit line = fit_mapping(x, y, Mapping::linear);
   EXPECT_LE(sum_squares(fit.predicted, y), sum_squares(line.predicted, y));
+}
+
+TEST(P1401Mapping, ConstrainedCubicPropertiesOnRandomData) {
+  // Every monotonic line is a monotonic cubic, so the constrained optimum is never worse than the
+  // least-squares line, and never better than the unconstrained cubic.
+  std::mt19937_64 rng(7);
+  auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  int constrained = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<double> x, y;
+    const double bend = 4 * uniform() - 2;
+    for (int i = 0; i < 15; ++i) {
+      x.push_back(10 * uniform());
+      y.push_back(x.back() + bend * std::pow(x.back() - 5, 2) + 3 * uniform());
+    }
+    const MappingFit fit = fit_mapping(x, y, Mapping::cubic);
+    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+    const bool increasing = fit.function(*hi) >= fit.function(*lo);
+    expect_monotonic_over(fit.function, *lo, *hi, increasing);
+    const double ss = sum_squares(fit.predicted, y);
+    EXPECT_LE(ss, sum_squares(fit_mapping(x, y, Mapping::linear).predicted, y) * (1 + 1e-12));
+    constrained += fit.constrained;
+  }
+  EXPECT_GT(constrained, 10);  // the trials exercise the constrained path
+  EXPECT_LT(constrained, 40);
+}
+
+TEST(P1401Mapping, Logistic5OnLinearDataStaysFinite) {
+  std::vector<double> x, y;
+  for (int i = 0; i < 30; ++i) {
+    x.push_back(i);
+    y.push_back(1 + 0.1 * i + 0.01 * ((i * 7) % 5 - 2));
+  }
+  const MappingFit fit = fit_mapping(x, y, Mapping::logistic5);
+  for (double p : fit.function.parameters) EXPECT_TRUE(std::isfinite(p));
+  EXPECT_LE(sum_squares(fit.predicted, y),
+            sum_squares(fit_mapping(x, y, Mapping::logistic4).predicted, y) * (1 + 1e-9));
 }
 
 TEST(P1401Mapping, Logistic4IsFitLogistic) {
