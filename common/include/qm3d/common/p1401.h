@@ -47,7 +47,11 @@ std::string_view mapping_name(Mapping mapping);
 /// @throws std::invalid_argument  an unknown name (the message lists the known ones)
 Mapping parse_mapping(std::string_view name);
 
-/// d, the number of parameters the mapping estimates from the data (P.1401 §7.5.1).
+/// d, the number of parameters the mapping estimates from the data: P.1401 §7.5.1 divides the
+/// squared errors by N - d, d the degrees of freedom of the mapping function (4 for its third-order
+/// mapping). With no mapping nothing is estimated, so d = 0 here; implementations that use d = 1
+/// then (e.g. the default of getRmse in the IoSR MATLAB toolbox) can pass 1 to
+/// p1401_statistics().
 std::size_t mapping_parameter_count(Mapping mapping);
 
 /// A fitted mapping. `parameters` (MOS and score units) by mapping:
@@ -155,7 +159,8 @@ P1401Evaluation evaluate_p1401(const std::vector<double>& scores, const std::vec
                                const LogisticFitOptions& options = {});
 
 /// Half-width of the 95 % interval of one MOS from the standard deviation of its M votes
-/// (P.1401 §7.4): t(0.975, M - 1) sd / sqrt(M), t the Student quantile.
+/// (P.1401 §7.4, Appendix III): t(0.975, M - 1) sd / sqrt(M), t the Student quantile (P.1401's
+/// "t(0.05, M)", two-tailed).
 /// @throws NumericError  votes < 2, sd negative or not finite
 double mos_ci95(double sd, std::size_t votes);
 
