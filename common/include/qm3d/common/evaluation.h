@@ -32,7 +32,8 @@ double spearman(const std::vector<double>& x, const std::vector<double>& y);
 /// JASA 1966). NaN when either variable is constant or there are fewer than 2 pairs.
 double kendall_tau_b(const std::vector<double>& x, const std::vector<double>& y);
 
-/// The VQEG 4-parameter logistic (VQEG FR-TV Phase II, eq. 1; ITU-T P.1401 §7.5.2):
+/// The VQEG 4-parameter logistic (VQEG FR-TV Phase II, eq. 1), a monotonic mapping as ITU-T
+/// P.1401 §7.3.3 asks for:
 /// f(x) = beta2 + (beta1 - beta2) / (1 + exp(-(x - beta3) / |beta4|)).
 /// Monotonic in x for every parameter value: beta2 as x -> -inf, beta1 as x -> +inf.
 struct LogisticFunction {
@@ -77,7 +78,7 @@ LogisticFit fit_logistic(const std::vector<double>& x, const std::vector<double>
 double root_mean_square_error(const std::vector<double>& predicted,
                               const std::vector<double>& observed);
 
-/// ITU-T P.1401 §7.4.2 outlier ratio: the fraction of stimuli whose prediction error
+/// ITU-T P.1401 §7.5.2.2 outlier ratio: the fraction of stimuli whose prediction error
 /// |predicted - mos| exceeds the half-width of the MOS 95% confidence interval.
 /// @param[in] ci95  #n half-widths of the 95% confidence intervals of the MOS (>= 0)
 double outlier_ratio(const std::vector<double>& predicted, const std::vector<double>& mos,
@@ -100,7 +101,7 @@ struct EvaluationOptions {
   LogisticFitOptions fit;
 };
 
-/// Percentile bootstrap interval.
+/// A confidence interval: percentile bootstrap here, analytic in p1401.h.
 struct Interval {
   double low = 0;
   double high = 0;
@@ -108,7 +109,8 @@ struct Interval {
 
 struct Statistic {
   double value = 0;
-  std::optional<Interval> ci;  ///< absent when EvaluationOptions::bootstrap == 0
+  /// absent when EvaluationOptions::bootstrap == 0 (evaluate_scores) or undefined (p1401.h)
+  std::optional<Interval> ci;
 };
 
 struct EvaluationResult {
