@@ -367,6 +367,12 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "CSV of labelled pairs (first, second, label: 1 first better, -1 worse, 0 "
                   "similar) for Krasula's analysis")
       ->type_name("FILE");
+  cmd->add_option("--mapping", o.mapping,
+                  "Mapping of the scores to the MOS scale before P.1401's statistics (RMSE with "
+                  "N - d degrees of freedom, RMSE*, outlier ratio, analytic intervals, tests "
+                  "between metrics): logistic4 (VQEG, the default), logistic5, cubic "
+                  "(monotonic), linear or none")
+      ->check(CLI::IsMember({"logistic4", "logistic5", "cubic", "linear", "none"}));
   cmd->add_option("--group-column", o.group_column,
                   "Column of MOS (e.g. the source model): only pairs within a group are "
                   "labelled (the BASICS intra-source track)");

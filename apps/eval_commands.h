@@ -28,6 +28,7 @@ struct EvalCommandOptions {
   std::string raw;                  ///< long format: stimulus, observer, score
   std::string pairs;                ///< first, second, label
   std::string group_column;         ///< MOS column: only pairs within a group
+  std::string mapping;              ///< empty: the one-column logistic4 evaluation
   std::size_t bootstrap = 1000;
   std::uint64_t seed = 1;
   bool json = false, csv = false;

@@ -180,13 +180,17 @@ std::string gnuplot_script(const ScatterPlot& p, const fs::path& output) {
     << "set xlabel " << gnuplot_quoted(p.x_label) << " noenhanced\n"
     << "set ylabel " << gnuplot_quoted(p.y_label) << " noenhanced\n"
     << "set key off\nset grid\n"
-    << "b1 = " << p.curve.beta1 << "; b2 = " << p.curve.beta2 << "; b3 = " << p.curve.beta3
-    << "; b4 = " << p.curve.beta4 << "\n"
-    << "f(x) = b2 + (b1 - b2) / (1 + exp(-(x - b3) / abs(b4)))\n$points << EOD\n";
+    << "$points << EOD\n";
   for (std::size_t i = 0; i < p.x.size(); ++i) s << p.x[i] << " " << p.y[i] << "\n";
-  s << "EOD\nset samples " << kCurveSamples
-    << "\nplot $points using 1:2 with points pt 7 ps 0.6 lc rgb '" << kPointColour
-    << "', f(x) with lines lw 2 lc rgb '" << kCurveColour << "'\nset output\n";
+  // The mapping as sampled points (any mapping, drawn as the SVG draws it).
+  const Range x = padded_range(p.x);
+  const std::vector<double> ys = curve_samples(p, x);
+  s << "EOD\n$curve << EOD\n";
+  for (int i = 0; i <= kCurveSamples; ++i) {
+    s << x.lo + (x.hi - x.lo) * i / kCurveSamples << " " << ys[static_cast<std::size_t>(i)] << "\n";
+  }
+  s << "EOD\nplot $points using 1:2 with points pt 7 ps 0.6 lc rgb '" << kPointColour
+    << "', $curve using 1:2 with lines lw 2 lc rgb '" << kCurveColour << "'\nset output\n";
   return s.str();
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@ namespace qm3d::app {
 struct ScatterPlot {
   std::vector<double> x;   ///< #n scores
   std::vector<double> y;   ///< #n MOS
-  LogisticFunction curve;  ///< drawn over the range of x
+  std::function<double(double)> curve;  ///< the fitted mapping, drawn over the range of x
   std::string title;
   std::string x_label;
   std::string y_label;

@@ -314,8 +314,9 @@ std::string protocol_text(const ordered_json& j, const std::vector<std::string>&
       {"plcc", "PLCC"},
       {"srocc", "SROCC"},
       {"krocc", "KROCC"},
-      {"plcc_mapped", "PLCC (logistic)"},
-      {"rmse_mapped", "RMSE (logistic)"},
+      {"plcc_mapped", "PLCC (mapped)"},
+      {"rmse_mapped", "RMSE (mapped)"},
+      {"rmse_star", "RMSE*"},
       {"outlier_ratio", "outlier ratio"}};
   for (const auto& [key, label] : stats) {
     if (!j["metrics"][names[0]]["statistics"].contains(key)) continue;
@@ -341,7 +342,7 @@ std::string protocol_text(const ordered_json& j, const std::vector<std::string>&
         << k["rule"].get<std::string>() << "\n";
   }
   if (!j["comparisons"].empty()) {
-    out << "comparisons (two-sided p):\n";
+    out << "comparisons (p: two-sided, one-sided for the F tests):\n";
     TextTable c;
     c.row({"  a", "b", "test", "statistic", "p"});
     for (const auto& x : j["comparisons"]) {
@@ -413,12 +414,12 @@ void plot_protocol(const std::string& path, const std::vector<MetricScores>& met
   AucPlot auc;
   for (const MetricScores& m : metrics) {
     const ordered_json& mj = j["metrics"][m.name];
-    const ordered_json& map = mj["mapping"];
-    ScatterPlot p{m.scores, subjective.mos,
-                  LogisticFunction{map["beta1"].get<double>(), map["beta2"].get<double>(),
-                                   map["beta3"].get<double>(), map["beta4"].get<double>()},
+    MappingFunction map{parse_mapping(mj["mapping"]["name"].get<std::string>()), {}};
+    for (const auto& v : mj["mapping"]["parameters"]) map.parameters.push_back(v.is_number() ? v.get<double>() : NAN);
+    ScatterPlot p{m.scores, subjective.mos, map,
                   m.name + ": PLCC " + fixed(mj["statistics"]["plcc"]["value"], "%.3f") +
-                      ", SROCC " + fixed(mj["statistics"]["srocc"]["value"], "%.3f"),
+                      ", SROCC " + fixed(mj["statistics"]["srocc"]["value"], "%.3f") + ", " +
+                      mj["mapping"]["name"].get<std::string>() + " mapping",
                   m.name, mos_label.empty() ? "MOS" : mos_label};
     write_scatter_plot(sibling(m.name, base.extension().string()), p);
     if (!mj["krasula"].is_null()) {
@@ -444,6 +445,7 @@ void plot_protocol(const std::string& path, const std::vector<MetricScores>& met
 
 bool needs_protocol(const EvalCommandOptions& o) {
   return o.scores_column.find(',') != std::string::npos || o.scores_column == "all" ||
+         !o.mapping.empty() ||
          !o.sd_column.empty() || !o.raw.empty() || !o.pairs.empty() ||
          split_by_metric(read_csv_table(o.scores)).size() > 1;
 }
@@ -560,6 +562,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
   options.evaluation.bootstrap = o.bootstrap;
   options.evaluation.seed = o.seed;
   options.evaluation.confidence = kConfidence;
+  options.mapping = parse_mapping(o.mapping.empty() ? "logistic4" : o.mapping);
   ordered_json j = {{"command", "eval"}, {"version", kVersion}};
   j["scores"] = {{"file", scores.path}, {"key", scores.header[key]}, {"rows", scores.rows.size()}};
   j["mos"] = {{"file", mos.path},

@@ -12,14 +12,28 @@ using ordered_json = nlohmann::ordered_json;
 
 ordered_json number(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(); }
 
-ordered_json statistics_json(const EvaluationResult& r) {
+ordered_json statistics_json(const EvaluationResult& r, const P1401Statistics& p) {
   ordered_json s = {{"plcc", statistic_json(r.plcc)},
                     {"srocc", statistic_json(r.srocc)},
                     {"krocc", statistic_json(r.krocc)},
-                    {"plcc_mapped", statistic_json(r.plcc_logistic)},
-                    {"rmse_mapped", statistic_json(r.rmse_logistic)}};
-  if (r.outlier_ratio) s["outlier_ratio"] = statistic_json(*r.outlier_ratio);
+                    {"plcc_mapped", statistic_json(p.plcc)},
+                    {"rmse_mapped", statistic_json(p.rmse)}};
+  if (p.rmse_star) s["rmse_star"] = statistic_json(*p.rmse_star);
+  if (p.outlier_ratio) s["outlier_ratio"] = statistic_json(*p.outlier_ratio);
   return s;
+}
+
+ordered_json mapping_json(const P1401Evaluation& p) {
+  const MappingFit& f = p.fit;
+  ordered_json j = {{"name", std::string(mapping_name(f.function.mapping))},
+                    {"parameters", ordered_json::array()},
+                    {"parameter_count", f.parameter_count},
+                    {"degrees_of_freedom", p.statistics.degrees_of_freedom},
+                    {"converged", f.converged},
+                    {"bounded", f.bounded},
+                    {"constrained", f.constrained}};
+  for (double v : f.function.parameters) j["parameters"].push_back(number(v));
+  return j;
 }
 
 ordered_json krasula_metric_json(const KrasulaMetric& m, const KrasulaResult& r) {
@@ -55,6 +69,8 @@ ProtocolResult run_protocol(const std::vector<MetricScores>& metrics,
   for (const MetricScores& m : metrics) {
     r.evaluations.push_back(
         evaluate_scores(m.scores, subjective.mos, subjective.ci95, options.evaluation));
+    r.p1401.push_back(evaluate_p1401(m.scores, subjective.mos, options.mapping, subjective.ci95,
+                                     options.evaluation.fit));
   }
   if (subjective.pairs) {
     // Krasula's differences are oriented higher = better: a distortion's scores are negated.
@@ -80,9 +96,8 @@ ordered_json protocol_json(const std::vector<MetricScores>& metrics,
     ordered_json j;
     j["orientation"] = {{"higher_is_better", metrics[i].higher_is_better},
                         {"from", metrics[i].orientation_source}};
-    j["statistics"] = statistics_json(e);
-    j["mapping"] = logistic_json(e.fit);
-    j["mapping"]["name"] = "logistic4";
+    j["statistics"] = statistics_json(e, r.p1401[i].statistics);
+    j["mapping"] = mapping_json(r.p1401[i]);
     j["bootstrap"] = {{"replicates", e.bootstrap_replicates}, {"used", e.bootstrap_used}};
     j["krasula"] =
         r.krasula ? krasula_metric_json(r.krasula->metrics[i], *r.krasula) : ordered_json();
@@ -91,6 +106,23 @@ ordered_json protocol_json(const std::vector<MetricScores>& metrics,
   out["metrics"] = std::move(per_metric);
   out["krasula"] = nullptr;
   out["comparisons"] = ordered_json::array();
+  for (std::size_t a = 0; a < metrics.size(); ++a) {
+    for (std::size_t b = a + 1; b < metrics.size(); ++b) {
+      const P1401Comparison c = compare_p1401(r.p1401[a].statistics, r.p1401[b].statistics);
+      const std::string& na = metrics[a].name;
+      const std::string& nb = metrics[b].name;
+      out["comparisons"].push_back(comparison(na, nb, "fisher_z_plcc", c.plcc.statistic, c.plcc.p));
+      out["comparisons"].push_back(comparison(na, nb, "f_rmse", c.rmse.statistic, c.rmse.p));
+      if (c.rmse_star) {
+        out["comparisons"].push_back(
+            comparison(na, nb, "f_rmse_star", c.rmse_star->statistic, c.rmse_star->p));
+      }
+      if (c.outlier_ratio) {
+        out["comparisons"].push_back(
+            comparison(na, nb, "outlier_ratio", c.outlier_ratio->statistic, c.outlier_ratio->p));
+      }
+    }
+  }
   if (r.krasula) {
     const KrasulaResult& k = *r.krasula;
     out["krasula"] = {{"rule", subjective.pairs->rule},

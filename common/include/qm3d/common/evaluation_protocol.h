@@ -11,6 +11,7 @@
 
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/krasula.h"
+#include "qm3d/common/p1401.h"
 
 namespace qm3d {
 
@@ -36,12 +37,16 @@ struct SubjectiveData {
 };
 
 struct ProtocolOptions {
+  /// The bootstrap of PLCC, SROCC and KROCC (and of the logistic4 fit it refits).
   EvaluationOptions evaluation;
+  /// The mapping of the scores to the MOS scale before the P.1401 statistics.
+  Mapping mapping = Mapping::logistic4;
 };
 
 /// The numbers of the evaluation.
 struct ProtocolResult {
   std::vector<EvaluationResult> evaluations;  ///< one per metric, in order
+  std::vector<P1401Evaluation> p1401;         ///< the mapping and its statistics, per metric
   std::optional<KrasulaResult> krasula;       ///< when SubjectiveData::pairs is given
 };
 
@@ -53,10 +58,12 @@ ProtocolResult run_protocol(const std::vector<MetricScores>& metrics,
                             const SubjectiveData& subjective, const ProtocolOptions& options = {});
 
 /// The JSON of the evaluation: "stimuli", "metrics": {NAME: {"orientation", "statistics":
-/// {plcc, srocc, krocc, plcc_mapped, rmse_mapped[, outlier_ratio]}, "mapping",
+/// {plcc, srocc, krocc (bootstrap intervals), plcc_mapped, rmse_mapped[, rmse_star,
+/// outlier_ratio] (P.1401's analytic intervals)}, "mapping" {name, parameters, ...},
 /// "krasula": {auc_ds, auc_bw, c0, thr, thr_prctile, se_ds, se_bw, different, similar}}},
 /// "krasula": {rule, pairs, different, better, similar} (or null), and "comparisons": [{a, b,
-/// test, statistic, p}] for every a before b, tests delong_auc_ds, delong_auc_bw, c0.
+/// test, statistic, p}] for every a before b: fisher_z_plcc, f_rmse[, f_rmse_star,
+/// outlier_ratio] (P.1401), then with pairs delong_auc_ds, delong_auc_bw, c0 (Krasula).
 nlohmann::ordered_json protocol_json(const std::vector<MetricScores>& metrics,
                                      const SubjectiveData& subjective, const ProtocolResult& r);
 
