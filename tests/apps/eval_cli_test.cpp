@@ -10,6 +10,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "qm3d/common/evaluation.h"
@@ -427,6 +428,51 @@ TEST_F(EvalCli, BatchFileOfSeveralMetricsIsOneColumnPerMetric) {
                             " --bootstrap 0");
   EXPECT_EQ(label.code, 2);
   EXPECT_NE(label.err.find(p.string() + ":2: the label must be 1"), std::string::npos) << label.err;
+}
+
+// --mapping linear: the P.1401 values follow from the least-squares line, recomputed here; with
+// CIs, RMSE* and the outlier ratio and their tests between the two metrics.
+TEST_F(EvalCli, P1401StatisticsAfterTheChosenMapping) {
+  const std::vector<double> mos = {1.2, 1.9, 2.7, 3.1, 3.9, 4.4, 4.8, 2.2};
+  const std::vector<double> ci = {0.2, 0.3, 0.2, 0.25, 0.3, 0.2, 0.15, 0.3};
+  const std::vector<double> a = {0.9, 2.1, 2.5, 3.4, 3.7, 4.6, 4.7, 2.0};
+  const std::vector<double> b = {10, 22, 24, 37, 35, 41, 50, 26};
+  std::string scores = "distorted,a,b\n", subjective = "distorted,mos,ci\n";
+  for (std::size_t i = 0; i < mos.size(); ++i) {
+    scores += "s" + std::to_string(i) + "," + exact(a[i]) + "," + exact(b[i]) + "\n";
+    subjective += "s" + std::to_string(i) + "," + exact(mos[i]) + "," + exact(ci[i]) + "\n";
+  }
+  const fs::path s = file("scores.csv", scores), m = file("mos.csv", subjective);
+  const CliRun run = qm3d("eval " + s.string() + " " + m.string() +
+                          " --scores-column a,b --ci-column ci --mapping linear --bootstrap 0 --json");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json j = json::parse(run.out);
+  // The line y = p x + q by least squares, and RMSE with N - 2 degrees of freedom.
+  const double n = static_cast<double>(mos.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < mos.size(); ++i) {
+    sx += a[i], sy += mos[i], sxx += a[i] * a[i], sxy += a[i] * mos[i];
+  }
+  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx), icept = (sy - slope * sx) / n;
+  double sse = 0, star = 0;
+  std::size_t outliers = 0;
+  for (std::size_t i = 0; i < mos.size(); ++i) {
+    const double e = std::fabs(mos[i] - (slope * a[i] + icept));
+    sse += e * e;
+    star += std::pow(std::max(0.0, e - ci[i]), 2);
+    outliers += e > ci[i];
+  }
+  const json& st = j["metrics"]["a"]["statistics"];
+  EXPECT_EQ(j["metrics"]["a"]["mapping"]["name"], "linear");
+  EXPECT_EQ(j["metrics"]["a"]["mapping"]["degrees_of_freedom"], 6);
+  EXPECT_NEAR(st["rmse_mapped"]["value"].get<double>(), std::sqrt(sse / (n - 2)), 1e-12);
+  EXPECT_NEAR(st["rmse_star"]["value"].get<double>(), std::sqrt(star / (n - 2)), 1e-12);
+  EXPECT_NEAR(st["outlier_ratio"]["value"].get<double>(), static_cast<double>(outliers) / n, 1e-15);
+  EXPECT_TRUE(st["rmse_mapped"]["ci95"].is_array());
+  std::set<std::string> tests;
+  for (const json& c : j["comparisons"]) tests.insert(c["test"].get<std::string>());
+  EXPECT_EQ(tests, (std::set<std::string>{"fisher_z_plcc", "f_rmse", "f_rmse_star", "outlier_ratio"}));
+  EXPECT_TRUE(j["krasula"].is_null());
 }
 
 TEST_F(EvalCli, BadInputIsOneLineNamingTheFileAndColumn) {
