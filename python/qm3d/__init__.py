@@ -330,7 +330,10 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     release = release or (ref_inputs is None and dist_inputs is None)
     ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"])
     dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"])
-    result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
+    reads = spec["reads"]
+    if spec["reads_two_meshes_as_meshes"] and ref_inputs.kind == dist_inputs.kind == "mesh":
+        reads = "mesh"  # the metric dispatches on the pair (dlab: meshes by projection)
+    result = _qm3d.run(name, ref_inputs.get(reads), dist_inputs.get(reads),
                        _json.dumps(options), run["direction"], _thread_count(run["threads"]),
                        bool(run["per_element"]),
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
