@@ -20,6 +20,7 @@
 //   directions. A distortion: 0 for identical colours at identical positions.
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -128,6 +129,15 @@ SurfaceColours direction_colours(const SurfaceColourMatcher& on_surfaces, const 
   return nearest_colours(iterated.cloud(), other.cloud(), table, threads);
 }
 
+/// Adds each warning not given yet (both directions repair the same meshes alike).
+void add_warnings(MetricResult& result, const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) {
+    if (std::find(result.warnings.begin(), result.warnings.end(), w) == result.warnings.end()) {
+      result.warnings.push_back(w);
+    }
+  }
+}
+
 MetricResult run_dlab(const SurfaceColourMatcher& on_surfaces, const Input& ref, const Input& dist,
                       const RunOptions& run) {
   const auto start = std::chrono::steady_clock::now();
@@ -141,19 +151,16 @@ MetricResult run_dlab(const SurfaceColourMatcher& on_surfaces, const Input& ref,
   const Direction dir = run.direction.value_or(Direction::kSymmetric);
   MetricResult result;
   result.metric = "dlab";
-  if (meshes) {
-    for (const Input* in : {&ref, &dist}) {
-      for (const std::string& w : in->mesh().warnings) result.warnings.push_back(w);
-    }
-  }
+  if (meshes) add_warnings(result, ref.mesh().warnings);
+  if (meshes) add_warnings(result, dist.mesh().warnings);
   if (dir != Direction::kDistToRef) {
     const SurfaceColours c = direction_colours(on_surfaces, ref, dist, meshes, *table, run.threads);
-    result.warnings.insert(result.warnings.end(), c.warnings.begin(), c.warnings.end());
+    add_warnings(result, c.warnings);
     result.ref_to_dist = direction_result(c, run.per_element);
   }
   if (dir != Direction::kRefToDist) {
     const SurfaceColours c = direction_colours(on_surfaces, dist, ref, meshes, *table, run.threads);
-    result.warnings.insert(result.warnings.end(), c.warnings.begin(), c.warnings.end());
+    add_warnings(result, c.warnings);
     result.dist_to_ref = direction_result(c, run.per_element);
   }
   if (run.inputs_done) run.inputs_done();
