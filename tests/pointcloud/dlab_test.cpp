@@ -187,6 +187,26 @@ TEST(Dlab, SameBitsForAnyThreadCount) {
   }
 }
 
+// Stronger colour noise, larger D_LAB; the same mesh as OFF, PLY or OBJ, the same score (to the
+// OBJ's printed colour digits).
+TEST(Dlab, GrowsWithColourNoiseAndIgnoresTheFileFormat) {
+  const fs::path pcqm = test::reference_dir() / "pcqm", cmdm = test::reference_dir() / "cmdm";
+  const std::string ref = (pcqm / "sphere_50k_ref.ply").string();
+  const double weak = dlab(ref, (pcqm / "sphere_50k_cnoise10.ply").string()).score;
+  const double strong = dlab(ref, (pcqm / "sphere_50k_cnoise30.ply").string()).score;
+  EXPECT_GT(weak, 1.0);
+  EXPECT_GT(strong, 2 * weak);
+  const double off =
+      dlab((cmdm / "blob4_ref.off").string(), (cmdm / "blob4_colnoise.off").string()).score;
+  const auto score = [&](const char* ext) {
+    return dlab((cmdm / ("blob4_ref" + std::string(ext))).string(),
+                (cmdm / ("blob4_colnoise" + std::string(ext))).string())
+        .score;
+  };
+  EXPECT_EQ(score(".ply"), off);
+  EXPECT_NEAR(score(".obj"), off, 1e-8 * off);  // its colours are written with 6 decimals
+}
+
 class DlabFiles : public ::testing::Test {
  protected:
   void SetUp() override {
