@@ -1,5 +1,6 @@
 // What the mesh module brings to a metric registry (qm3d/common/metric.h): CMDM and MSDM2, the
-// mesh readers (OBJ, OFF, PLY; textured OBJ coloured from its texture) and the surface sampler.
+// mesh readers (OBJ, OFF, PLY; textured OBJ coloured from its texture), the surface sampler and
+// the colour matcher (D_LAB's mesh side: CMDM's projection).
 #pragma once
 
 #include "qm3d/common/metric.h"

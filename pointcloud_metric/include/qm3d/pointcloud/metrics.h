@@ -1,5 +1,6 @@
 // What the point-cloud module brings to a metric registry (qm3d/common/metric.h): PCQM (any two
-// inputs, meshes read as their vertices), PCQM on surface samples of two meshes, and the cloud
+// inputs, meshes read as their vertices), PCQM on surface samples of two meshes, pc_error's PSNR,
+// D_LAB (any two inputs; two meshes through the mesh module's colour matcher) and the cloud
 // readers (PLY, PCD).
 #pragma once
 
