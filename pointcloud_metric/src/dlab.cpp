@@ -36,7 +36,8 @@
 namespace qm3d::pointcloud {
 namespace {
 
-/// Elements per chunk of the parallel loops (fixed: results do not depend on the thread count).
+/// Queries per chunk of the parallel search (each element's match is its own: the results do not
+/// depend on the schedule or the thread count).
 constexpr int kChunk = 1024;
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
