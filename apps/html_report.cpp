@@ -254,6 +254,7 @@ class Shapes {
   }
   const Shape& operator[](int i) const { return shapes_[static_cast<std::size_t>(i)]; }
   std::size_t size() const { return shapes_.size(); }
+  Input::Kind reads(const MetricSpec& spec) const { return spec.reads_for(ref_, dist_); }
 
  private:
   const Input& ref_;
@@ -276,7 +277,7 @@ json layers_json(const std::vector<ReportEntry>& entries, Shapes& shapes, Blobs&
     for (int k = 0; k < 2; ++k) {
       const auto& [dir, d] = dirs[prefer_dist ? k : 1 - k];
       if (!d->has_value() || (*d)->per_element.empty()) continue;
-      const int g = shapes.index(dir == Direction::kRefToDist, e.spec->reads);
+      const int g = shapes.index(dir == Direction::kRefToDist, shapes.reads(*e.spec));
       layers.push_back(layer_json(e, dir, **d, g, shapes[g], blobs));
     }
   }

@@ -378,6 +378,13 @@ bool MetricSpec::applies(const Input& reference, const Input& distorted) const {
   return false;
 }
 
+Input::Kind MetricSpec::reads_for(const Input& reference, const Input& distorted) const {
+  if (reads_two_meshes_as_meshes && reference.is_mesh() && distorted.is_mesh()) {
+    return Input::Kind::kMesh;
+  }
+  return reads;
+}
+
 namespace {
 
 std::string value_text(const nlohmann::json& v) { return v.dump(); }
@@ -662,18 +669,19 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
   check_thread_count(run.threads);
   check_model(run);
   // Both inputs are read concurrently unless one thread was asked for.
+  const Input::Kind reads = spec.reads_for(reference, distorted);
   auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
-                             [&] { reference.load(spec.reads); });
-  distorted.load(spec.reads);
+                             [&] { reference.load(reads); });
+  distorted.load(reads);
   ref_task.get();
   // Taken now: the metric may release the inputs (RunOptions::inputs_done).
-  const std::vector<std::string> reading = spec.reads == Input::Kind::kCloud
+  const std::vector<std::string> reading = reads == Input::Kind::kCloud
                                                ? cloud_reader_warnings(reference, distorted)
                                                : std::vector<std::string>();
   MetricResult result;
   try {
-    check_coordinate_range(positions_of(reference, spec.reads), reference.name());
-    check_coordinate_range(positions_of(distorted, spec.reads), distorted.name());
+    check_coordinate_range(positions_of(reference, reads), reference.name());
+    check_coordinate_range(positions_of(distorted, reads), distorted.name());
     result = spec.run(spec, reference, distorted, run, values);
     check_finite_result(spec, result);
   } catch (const NumericError& e) {

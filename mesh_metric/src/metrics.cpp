@@ -61,6 +61,7 @@ void register_metrics(Registry& registry) {
     return read_mesh_vertices_data(path, mesh_format(format, path), options);
   };
   registry.set_sampler(sample);
+  registry.set_colour_matcher(match_surface_colours);
   registry.add(cmdm_spec());
   registry.add(msdm2_spec());
 }

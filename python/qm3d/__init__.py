@@ -330,7 +330,10 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     release = release or (ref_inputs is None and dist_inputs is None)
     ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"])
     dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"])
-    result = _qm3d.run(name, ref_inputs.get(spec["reads"]), dist_inputs.get(spec["reads"]),
+    reads = spec["reads"]
+    if spec["reads_two_meshes_as_meshes"] and ref_inputs.kind == dist_inputs.kind == "mesh":
+        reads = "mesh"  # the metric dispatches on the pair (dlab: meshes by projection)
+    result = _qm3d.run(name, ref_inputs.get(reads), dist_inputs.get(reads),
                        _json.dumps(options), run["direction"], _thread_count(run["threads"]),
                        bool(run["per_element"]),
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
@@ -411,8 +414,9 @@ for _name, _spec in _SPECS.items():
 
 
 def compare(reference, distorted, **options):
-    """Every metric that applies to the pair (as ``qm3d compare``): CMDM, MSDM2, PCQM and
-    pcqm_sampled for two meshes, PCQM otherwise. Keyword arguments go to every metric that has
+    """Every metric that applies to the pair (as ``qm3d compare``), in the registry's order:
+    CMDM, MSDM2, PCQM, pcqm_sampled and D_LAB for two meshes; PCQM, PSNR and D_LAB for two
+    clouds; PCQM and D_LAB for a mesh and a cloud. Keyword arguments go to every metric that has
     them (e.g. scales=, radius=, points=); run options (direction, threads, per_element,
     data_dir, progress) to all; ``model`` (a file) applies to the metric it names.
 

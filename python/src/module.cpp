@@ -172,6 +172,7 @@ py::dict spec_dict(const MetricSpec& s) {
                     : s.applies_to == AppliesTo::kClouds ? "clouds"
                                                          : "both";
   d["reads"] = s.reads == Input::Kind::kMesh ? "mesh" : "cloud";
+  d["reads_two_meshes_as_meshes"] = s.reads_two_meshes_as_meshes;
   d["default_direction"] = direction_name(s.default_direction);
   d["direction_help"] = s.direction_help;
   d["takes_model"] = s.takes_model;

@@ -72,17 +72,18 @@ def test_pcqm_gives_the_reference_value():
 def test_compare_runs_every_metric_that_applies():
     meshes = qm3d.compare(str(REF / "cmdm" / "blob4_ref.off"), str(REF / "cmdm" / "blob4_colnoise.off"),
                           points=2000)
-    assert list(meshes) == ["cmdm", "msdm2", "pcqm", "pcqm_sampled"]
-    # The files are read once for all four and freed by the last: each score is the metric's own.
+    assert list(meshes) == ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "dlab"]
+    # The files are read once for all five and freed by the last: each score is the metric's own.
     for name, result in meshes.items():
         alone = qm3d.metric(name, str(REF / "cmdm" / "blob4_ref.off"),
                             str(REF / "cmdm" / "blob4_colnoise.off"),
                             **({"points": 2000} if name == "pcqm_sampled" else {}))
         assert result.score == alone.score, name
     clouds = qm3d.compare(CLOUD_REF, CLOUD_DIST)
-    assert list(clouds) == ["pcqm", "psnr"]
+    assert list(clouds) == ["pcqm", "psnr", "dlab"]
     assert clouds["pcqm"].score == qm3d.pcqm(CLOUD_REF, CLOUD_DIST).score
     assert clouds["psnr"].score == qm3d.psnr(CLOUD_REF, CLOUD_DIST).score
+    assert clouds["dlab"].score == qm3d.dlab(CLOUD_REF, CLOUD_DIST).score
 
 
 # ---- arrays, files and Open3D objects give identical scores -------------------------------

@@ -143,7 +143,7 @@ TEST_F(BatchHostile, WorkersWriteTheRowsThisProcessWould) {
     return rows;
   };
   const auto isolated = rows_without_seconds("");
-  EXPECT_EQ(isolated.size(), 6u);  // header, 4 metrics of compare, the missing file
+  EXPECT_EQ(isolated.size(), 7u);  // header, 5 metrics of compare, the missing file
   EXPECT_EQ(isolated, rows_without_seconds("--no-isolation"));
 }
 

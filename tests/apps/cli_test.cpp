@@ -412,13 +412,15 @@ TEST_F(Cli, InputsAreRecognisedByContentNotExtension) {
   const CliRun named = qm3d("cmdm " + cmdm_file("blob4_ref.ply") + " " + cmdm_file("blob4_colnoise.off") + " --json");
   ASSERT_EQ(named.code, 0) << named.err;
   EXPECT_EQ(nlohmann::json::parse(renamed.out)["score"], nlohmann::json::parse(named.out)["score"]);
-  // compare sees two meshes (CMDM, MSDM2, both PCQMs) and, for a mesh and a cloud, PCQM only.
+  // compare sees two meshes (CMDM, MSDM2, both PCQMs, D_LAB) and, for a mesh and a cloud, PCQM
+  // and D_LAB only.
   const CliRun both = qm3d("compare " + mesh_ply.string() + " " + mesh_off.string() + " --json --points 2000");
   ASSERT_EQ(both.code, 0) << both.err;
-  EXPECT_EQ(nlohmann::json::parse(both.out)["metrics"].size(), 4u);
+  EXPECT_EQ(nlohmann::json::parse(both.out)["metrics"].size(), 5u);
   const CliRun mixed = qm3d("compare " + mesh_ply.string() + " " + cloud.string() + " --csv");
   ASSERT_EQ(mixed.code, 0) << mixed.err;
   EXPECT_NE(mixed.out.find(",pcqm,"), std::string::npos);
+  EXPECT_NE(mixed.out.find(",dlab,"), std::string::npos);
   EXPECT_EQ(mixed.out.find(",cmdm,"), std::string::npos);
   // A cloud given to a mesh metric: one clear line.
   const CliRun cloud_as_mesh = qm3d("msdm2 " + cloud.string() + " " + cloud.string());

@@ -78,7 +78,7 @@ TEST_F(SamplingCli, CompareJsonHasEveryMetricFiniteOnTheBundledData) {
                            bundled("blob3_bothnoise.off") + " --json --points 5000 --seed 2");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* metric : {"cmdm", "msdm2", "pcqm", "pcqm_sampled"}) {
+  for (const char* metric : {"cmdm", "msdm2", "pcqm", "pcqm_sampled", "dlab"}) {
     ASSERT_TRUE(j["metrics"].contains(metric)) << metric;
     const double score = j["metrics"][metric]["score"].get<double>();
     EXPECT_TRUE(std::isfinite(score)) << metric;
@@ -103,10 +103,10 @@ TEST_F(SamplingCli, BatchCompareWritesOneRowPerMetricAndResumes) {
       "batch " + list.string() + " -o " + results.string() + " --points 2000 --quiet";
   ASSERT_EQ(qm3d(cmd).code, 0);
   const std::string csv = slurp(results);
-  for (const char* m : {",cmdm,", ",msdm2,", ",pcqm,", ",pcqm_sampled,"}) {
+  for (const char* m : {",cmdm,", ",msdm2,", ",pcqm,", ",pcqm_sampled,", ",dlab,"}) {
     EXPECT_NE(csv.find(m), std::string::npos) << m << "\n" << csv;
   }
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);  // header + 4 rows
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 6);  // header + 5 rows
   ASSERT_EQ(qm3d(cmd + " --resume").code, 0);
   EXPECT_EQ(slurp(results), csv);  // nothing left to do
 }

@@ -171,6 +171,23 @@ TEST(Registry, FindsAppliesAndChoosesInRegistrationOrder) {
   EXPECT_THROW(reg.sampler(), std::logic_error);
 }
 
+// A metric that dispatches on the pair (D_LAB) reads two meshes as meshes, any other pair as
+// clouds; the others read as their spec says.
+TEST(MetricSpec, ReadsForDispatchesOnThePairOnlyWhenAsked) {
+  MetricSpec s = toy_metric("toy", AppliesTo::kBoth);
+  const Input m = Input::from_mesh(triangle(), "m"), c = Input::from_cloud(cloud_of({0}), "c");
+  EXPECT_EQ(s.reads_for(m, m), Input::Kind::kCloud);
+  s.reads_two_meshes_as_meshes = true;
+  EXPECT_EQ(s.reads_for(m, m), Input::Kind::kMesh);
+  EXPECT_EQ(s.reads_for(m, c), Input::Kind::kCloud);
+  EXPECT_EQ(s.reads_for(c, m), Input::Kind::kCloud);
+  EXPECT_EQ(s.reads_for(c, c), Input::Kind::kCloud);
+  s.reads = Input::Kind::kMesh;
+  s.reads_two_meshes_as_meshes = false;
+  EXPECT_EQ(s.reads_for(m, m), Input::Kind::kMesh);
+  EXPECT_FALSE(Registry().colour_matcher());  // none until the mesh module registers one
+}
+
 TEST(Input, InMemoryMeshesAreAlsoClouds) {
   const Input m = Input::from_mesh(triangle(), "tri");
   EXPECT_TRUE(m.is_mesh());

@@ -169,9 +169,9 @@ if ! diff <(without_seconds "$T/single.csv") <(without_seconds "$T/out1/RESULTS.
   fail "merged results differ from a single qm3d batch"
 fi
 rows=$(($(wc -l < "$T/single.csv") - 1))
-# meshes: 3 cmdm + 4 (compare: cmdm, msdm2, pcqm, pcqm_sampled) + 1 msdm2; clouds: 2 pcqm + 2
-# (compare: pcqm, psnr) + 1 missing file
-[ "$rows" -eq 13 ] || fail "expected 13 result rows, got $rows"
+# meshes: 3 cmdm + 5 (compare: cmdm, msdm2, pcqm, pcqm_sampled, dlab) + 1 msdm2; clouds: 2 pcqm
+# + 3 (compare: pcqm, psnr, dlab) + 1 missing file
+[ "$rows" -eq 15 ] || fail "expected 15 result rows, got $rows"
 log "1: PASS ($rows rows from 3 shards equal one batch)"
 
 # ---- 2: a task cancelled mid-run and resubmitted resumes its results ----------------------------

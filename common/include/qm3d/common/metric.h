@@ -29,6 +29,7 @@
 #include <utility>
 #include <vector>
 
+#include "qm3d/common/color.h"
 #include "qm3d/common/reading.h"
 #include "qm3d/common/result.h"
 #include "qm3d/common/types.h"
@@ -124,6 +125,21 @@ struct SurfaceSampling {
 /// Samples an input's surface (textured OBJ files from their texture).
 using SurfaceSampler = std::function<ColoredCloud(const Input&, const SurfaceSampling&)>;
 
+/// Each vertex of one mesh with its correspondence on another mesh's surface, as colours in
+/// LAB2000HL: `own[v]` the vertex's, `matched[v]` the one at its closest point on the other
+/// surface (CMDM's projection and interpolation of the face's vertex colours). One entry per
+/// vertex of the iterated input's mesh (MeshData::mesh).
+struct SurfaceColours {
+  std::vector<Lab> own;
+  std::vector<Lab> matched;
+  std::vector<std::string> warnings;  ///< the other mesh's repairs (e.g. faces dropped)
+};
+/// Matches `iterated`'s vertices on `other`'s surface (both meshes with vertex colours; a
+/// FormatError naming the file otherwise), with `threads` OpenMP threads (0 = the default): the
+/// same values for any count.
+using SurfaceColourMatcher = std::function<SurfaceColours(
+    const Input& iterated, const Input& other, const Lab2000hlTable& table, int threads)>;
+
 /// One option of a metric: its name (as the tool's --name and the bindings' keyword), help text
 /// and default. The default's JSON type is the option's type: integer, number, boolean (a
 /// flag), string (one of `choices` when not empty) or an array of numbers (its length fixed).
@@ -161,6 +177,9 @@ struct MetricSpec {
   AppliesTo applies_to = AppliesTo::kBoth;
   /// How the metric reads its inputs: as meshes (faces used) or as clouds (any mesh's vertices).
   Input::Kind reads = Input::Kind::kCloud;
+  /// With reads = kCloud: a pair of two meshes is read as meshes (the metric dispatches on the
+  /// pair, as D_LAB does: CMDM's projection for two meshes, PCQM's nearest neighbour otherwise).
+  bool reads_two_meshes_as_meshes = false;
   Direction default_direction = Direction::kSymmetric;
   std::string direction_help;  ///< what the directions mean for this metric
   /// How the symmetric score is made of the two directions' (as the report says it).
@@ -189,6 +208,9 @@ struct MetricSpec {
   std::optional<bool> column_higher_is_better(const std::string& column) const;
   /// True when the metric scores this pair of inputs.
   bool applies(const Input& reference, const Input& distorted) const;
+  /// How the metric reads this pair: `reads`, or kMesh for two meshes when
+  /// reads_two_meshes_as_meshes.
+  Input::Kind reads_for(const Input& reference, const Input& distorted) const;
   /// The option values with every default filled in; std::invalid_argument naming the option
   /// for an unknown name, a wrong type, a value out of range or not among the choices.
   OptionValues complete(const OptionValues& given) const;
@@ -220,6 +242,10 @@ class Registry {
   bool has_sampler() const { return static_cast<bool>(sampler_); }
   /// The surface sampler; std::logic_error when no module registered one.
   const SurfaceSampler& sampler() const;
+  /// The mesh module's closest-point colour correspondence (D_LAB's mesh side); empty when no
+  /// module registered one.
+  void set_colour_matcher(SurfaceColourMatcher matcher) { colour_matcher_ = std::move(matcher); }
+  const SurfaceColourMatcher& colour_matcher() const { return colour_matcher_; }
 
   /// Input::from_file(path, *this, options).
   Input read(const std::filesystem::path& path, const ReadOptions& options = {}) const {
@@ -230,6 +256,7 @@ class Registry {
   std::vector<MetricSpec> metrics_;
   Readers readers_;
   SurfaceSampler sampler_;
+  SurfaceColourMatcher colour_matcher_;
 };
 
 /// The named-value columns of a CSV holding results of these metrics (csv_header): the union

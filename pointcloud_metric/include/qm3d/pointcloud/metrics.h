@@ -1,5 +1,6 @@
 // What the point-cloud module brings to a metric registry (qm3d/common/metric.h): PCQM (any two
-// inputs, meshes read as their vertices), PCQM on surface samples of two meshes, and the cloud
+// inputs, meshes read as their vertices), PCQM on surface samples of two meshes, pc_error's PSNR,
+// D_LAB (any two inputs; two meshes through the mesh module's colour matcher) and the cloud
 // readers (PLY, PCD).
 #pragma once
 
@@ -16,11 +17,17 @@ MetricSpec pcqm_sampled_spec(SurfaceSampler sample);
 /// "psnr" (psnr.cpp): MPEG pc_error's D1/D2/colour values of two clouds (qm3d/pointcloud/psnr.h).
 MetricSpec psnr_spec();
 
+/// "dlab" (dlab.cpp): D_LAB, the mean LAB2000HL colour distance between each element and its
+/// correspondence on the other object; two meshes by `on_surfaces` (the mesh module's colour
+/// matcher: CMDM's projection) when given, any other pair (or every pair without it) by PCQM's
+/// nearest neighbour, meshes read as their vertices. No options.
+MetricSpec dlab_spec(SurfaceColourMatcher on_surfaces);
+
 /// Samples drawn from each mesh by pcqm_sampled when no points / density is given.
 inline constexpr int kDefaultSampledPoints = 20000;
 
-/// Registers the cloud reader, PCQM and, when a surface sampler is registered (the mesh module,
-/// registered first), pcqm_sampled.
+/// Registers the cloud reader, PCQM, when a surface sampler is registered (the mesh module,
+/// registered first) pcqm_sampled, psnr and dlab (with the registry's colour matcher).
 void register_metrics(Registry& registry);
 
 }  // namespace qm3d::pointcloud
