@@ -122,8 +122,7 @@ void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
     return;
   }
   m.higher_is_better = true;
-  m.orientation_source = "assumed (not a registered metric; --lower-is-better " + s.name +
-                         " for a distortion)";
+  m.orientation_source = "assumed: not a registered metric";
 }
 
 // The metric every row of a table names in its metric column, or empty.
@@ -534,6 +533,21 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
     throw FormatError("no stimulus in common between " + o.scores + " and " + o.mos +
                       " with a value of every metric");
   }
+  if (!quiet) {
+    for (std::size_t p = 0; p < joins.size(); ++p) {
+      const std::string what = pivot ? " (" + parts[p].first + ")" : "";
+      if (joins[p].left_only.count) {
+        std::cerr << "qm3d: warning: " << scores.path << what << ": " << joins[p].left_only.count
+                  << " rows have no partner in " << mos.path << ": "
+                  << joins[p].left_only.examples() << "\n";
+      }
+    }
+    if (joins[0].right_only.count) {
+      std::cerr << "qm3d: warning: " << mos.path << ": " << joins[0].right_only.count
+                << " rows have no partner in " << scores.path << ": "
+                << joins[0].right_only.examples() << "\n";
+    }
+  }
   if (!quiet && left_out.count) {
     std::cerr << "qm3d: warning: " << left_out.count
               << " stimuli left out (a metric's score empty, NaN or infinite, or no MOS): "
@@ -577,6 +591,18 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
                     {"seed", o.seed},
                     {"confidence", kConfidence},
                     {"method", "percentile; stimuli resampled with replacement; mapping refitted"}};
+  for (const MetricScores& m : metrics) {
+    const ordered_json& rho = j["metrics"][m.name]["statistics"]["srocc"]["value"];
+    if (quiet || !rho.is_number() || rho.get<double>() == 0) continue;
+    if ((rho.get<double>() > 0) != m.higher_is_better) {
+      std::cerr << "qm3d: warning: " << m.name << " is taken as a "
+                << (m.higher_is_better ? "quality" : "distortion") << " (" << m.orientation_source
+                << ") but SROCC is " << fixed(rho)
+                << (m.higher_is_better ? ": a distortion (--lower-is-better " + m.name + ")?"
+                                       : std::string(": is the MOS column a DMOS?"))
+                << " Krasula's BW analysis and C0 depend on it\n";
+    }
+  }
   if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, j, o.mos_column);
   emit(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
        o.output);

@@ -445,8 +445,7 @@ PYBIND11_MODULE(_qm3d, m) {
             ms.higher_is_better = known->first;
             ms.orientation_source = known->second;
           } else {
-            ms.orientation_source = "assumed (not a registered metric; lower_is_better=[\"" +
-                                    names[i] + "\"] for a distortion)";
+            ms.orientation_source = "assumed: not a registered metric";
           }
           metrics.push_back(std::move(ms));
         }
