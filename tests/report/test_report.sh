@@ -30,6 +30,7 @@ if [ ! -f "$THREE" ]; then
   echo "test_report: skipped: $THREE not found (Debian package libjs-three)"; exit 77
 fi
 [ -x "$QM3D" ] || { echo "test_report: $QM3D: not built"; exit 1; }
+QM3D="$(realpath "$QM3D")"  # the blob3 report below runs from the source root
 
 WORK="$(mktemp -d /tmp/qm3d-report-test.XXXXXX)"
 trap 'rm -rf "$WORK"' EXIT
@@ -75,9 +76,14 @@ pcqm_score="$("$QM3D" pcqm "$S/cloud_ref.ply" "$S/cloud_dist.ply" -q --radius 0.
 "$QM3D" pcqm "$S/cloud_ref.ply" "$S/cloud_dist.ply" -q --radius 0.02 --report "$WORK/pcqm.html" \
   --range "0,$pcqm_score" >/dev/null
 check_report "$WORK/pcqm.html" pcqm right
-# qm3d report (every metric) on a bundled pair, each object on its own scale.
-"$QM3D" report "$ROOT/data/meshes/blob3_ref.off" "$ROOT/data/meshes/blob3_bothnoise.off" -q \
-  -o "$WORK/blob3.html" >/dev/null
+# qm3d report (every metric) on a bundled pair, each object on its own scale, run from the
+# source root with relative paths: the report (and README's screenshot of it) shows the inputs as
+# given, not this machine's directories.
+(cd "$ROOT" && "$QM3D" report data/meshes/blob3_ref.off data/meshes/blob3_bothnoise.off -q \
+  -o "$WORK/blob3.html" >/dev/null)
+grep -q '"reference":"data/meshes/blob3_ref.off"' "$WORK/blob3.html" \
+  || fail "blob3: the report does not show the reference as given (data/meshes/blob3_ref.off)"
+grep -q "$ROOT" "$WORK/blob3.html" && fail "blob3: the report holds the absolute path $ROOT"
 check_report "$WORK/blob3.html" blob3 none
 [ -z "$KEEP_SHOT" ] || cp "$WORK/blob3.png" "$KEEP_SHOT"
 
