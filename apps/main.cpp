@@ -182,6 +182,17 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   return kExitOk;
 }
 
+// "qm3d 0.1.0 (commit ...)" and the reference tool each metric reproduces.
+std::string version_text() {
+  std::string text = std::string("qm3d ") + kVersion + " (commit " + git_commit() + ")";
+  for (const MetricSpec& spec : registry().metrics()) {
+    text += "\n  " + spec.name + ": " +
+            (spec.reproduces.empty() ? "qm3d's own definition (no reference implementation)"
+                                     : "reproduces " + spec.reproduces);
+  }
+  return text;
+}
+
 // "Distortions (0 = identical, larger is worse): CMDM, ...; qualities (...): PSNR.", from the
 // registry's orientation of each metric.
 std::string orientation_line() {
@@ -206,7 +217,7 @@ int run(int argc, char** argv) {
                orientation_line() +
                " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
                "mesh."};
-  app.set_version_flag("--version", std::string("qm3d ") + kVersion);
+  app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
   GlobalOptions global;
   add_global_options(&app, global);

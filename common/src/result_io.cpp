@@ -114,6 +114,7 @@ nlohmann::json to_json(const MetricResult& r) {
   const Provenance& p = r.provenance;
   nlohmann::json j = {{"metric", r.metric},
                       {"version", p.version.empty() ? std::string(kVersion) : p.version},
+                      {"commit", git_commit()},
                       {"reference", p.reference},
                       {"distorted", p.distorted},
                       {"options", p.options},
@@ -128,6 +129,7 @@ nlohmann::json to_json(const MetricResult& r) {
     directions["ref_to_dist"] = {{"score", number(r.ref_to_dist->score)}};
     add_direction(directions["ref_to_dist"], r, *r.ref_to_dist);
   }
+  if (!p.reproduces.empty()) j["reproduces"] = p.reproduces;
   j["directions"] = directions;
   // One direction: its features at the top level too (PCQM's own output is its one direction).
   if (!r.values.empty()) {

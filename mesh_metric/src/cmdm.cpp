@@ -55,6 +55,7 @@ MetricSpec cmdm_spec() {
   MetricSpec s;
   s.name = "cmdm";
   s.title = "CMDM";
+  s.reproduces = "MEPP-team/MEPP2 @ d977d05 (CMDM filter, example_CMDM)";
   s.summary = "CMDM between two coloured meshes (OBJ, OFF, PLY; textured OBJ coloured from its "
               "texture)";
   s.applies_to = AppliesTo::kMeshes;

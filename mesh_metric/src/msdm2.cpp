@@ -56,6 +56,7 @@ MetricSpec msdm2_spec() {
   MetricSpec s;
   s.name = "msdm2";
   s.title = "MSDM2";
+  s.reproduces = "MEPP-team/MEPP2 @ d977d05 (MSDM2 filter, example_msdm2)";
   s.summary = "MSDM2 (geometry only; colours ignored) between two meshes (OBJ, OFF, PLY)";
   s.applies_to = AppliesTo::kMeshes;
   s.reads = Input::Kind::kMesh;

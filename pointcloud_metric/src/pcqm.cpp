@@ -243,6 +243,7 @@ MetricSpec pcqm_spec() {
   MetricSpec s;
   s.name = "pcqm";
   s.title = "PCQM";
+  s.reproduces = "MEPP-team/PCQM @ 2a2c410";
   s.summary = "PCQM between two coloured point clouds (PLY, PCD; OBJ/OFF/PLY meshes are read as "
               "their vertices)";
   s.applies_to = AppliesTo::kBoth;

@@ -11,6 +11,7 @@ MetricSpec pcqm_sampled_spec(SurfaceSampler sample) {
   MetricSpec s;
   s.name = "pcqm_sampled";
   s.title = "PCQM_SAMPLED";
+  s.reproduces = "MEPP-team/PCQM @ 2a2c410 (on qm3d's own surface samples)";
   s.summary = "PCQM on clouds sampled from the surfaces of two meshes (both sampled alike: same "
               "count or density, same seed; textured OBJ sampled from its texture)";
   s.applies_to = AppliesTo::kMeshes;

@@ -655,6 +655,7 @@ MetricSpec psnr_spec() {
   MetricSpec s;
   s.name = "psnr";
   s.title = "PSNR";
+  s.reproduces = "MPEG pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric @ bd6df59)";
   s.summary =
       "MPEG pc_error's D1 (point-to-point) and D2 (point-to-plane) PSNR, Hausdorff and colour "
       "PSNR between two point clouds (pc_error 0.14.2's values; score = symmetric D1 PSNR, dB)";

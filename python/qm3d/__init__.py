@@ -34,6 +34,7 @@ import numpy as _np
 from . import _qm3d
 
 __version__ = _qm3d.__version__
+__commit__ = _qm3d.__commit__  # the git commit the module was built from ("unknown" outside git)
 
 # A metric call interrupted by Ctrl-C returns at once; its worker stops at its next stage
 # boundary on its own thread, and the interpreter waits for it before shutting down.

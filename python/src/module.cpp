@@ -179,6 +179,7 @@ py::dict spec_dict(const MetricSpec& s) {
   d["model_metric"] = s.model_name();
   d["value_names"] = s.value_names;
   d["higher_is_better"] = s.higher_is_better;
+  d["reproduces"] = s.reproduces;
   d["quality_value_names"] = s.quality_value_names;
   py::list options;
   for (const OptionSpec& o : s.options) {
@@ -273,6 +274,7 @@ PYBIND11_MODULE(_qm3d, m) {
   using namespace qm3d::python;
   m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
   m.attr("__version__") = kVersion;
+  m.attr("__commit__") = git_commit();
 
   // Typed errors: a file that cannot be read is an OSError, bad content a ValueError.
   py::register_exception<InputError>(m, "InputError", PyExc_OSError);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -85,6 +86,24 @@ TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
             std::string::npos)
       << help.out;
   EXPECT_EQ(help.out.find("Scores are distortions"), std::string::npos) << help.out;
+}
+
+// --version and every JSON result name the commit and the reference tool a metric reproduces.
+TEST_F(PsnrCli, VersionNamesTheCommitAndTheReferenceTools) {
+  const auto version = qm3d("--version");
+  ASSERT_EQ(version.code, 0) << version.err;
+  EXPECT_TRUE(std::regex_search(version.out,
+                                std::regex("^qm3d [0-9.]+ \\(commit ([0-9a-f]{12}(-dirty)?|unknown)\\)")))
+      << version.out;
+  EXPECT_NE(version.out.find("psnr: reproduces MPEG pc_error 0.14.2"), std::string::npos)
+      << version.out;
+  EXPECT_NE(version.out.find("cmdm: reproduces MEPP-team/MEPP2 @ d977d05"), std::string::npos)
+      << version.out;
+  const auto run = qm3d("psnr reference/mpeg/vox1_ref_n.ply reference/mpeg/vox1_ref_n.ply --json -q");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(run.out);
+  EXPECT_EQ(j["reproduces"], "MPEG pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric @ bd6df59)");
+  EXPECT_NE(version.out.find(j["commit"].get<std::string>()), std::string::npos);
 }
 
 TEST_F(PsnrCli, CsvHasTheNamedValueColumns) {

@@ -171,6 +171,10 @@ struct MetricSpec {
   std::string name;     ///< "cmdm": the command, the batch list's metric, the result's metric
   std::string title;    ///< "CMDM": how the tool prints it
   std::string summary;  ///< one line for --help
+  /// The reference implementation whose numbers the metric reproduces, by repository and
+  /// commit or version ("MEPP-team/MEPP2 @ d977d05"); empty when it has none (a definition of
+  /// qm3d's own). Echoed by --version and in every result's JSON.
+  std::string reproduces;
   /// The score is a quality (PSNR: higher is better; +inf for identical inputs), not a
   /// distortion (0 = identical, higher is worse).
   bool higher_is_better = false;

@@ -93,6 +93,7 @@ struct DirectionResult {
 /// Where a result comes from: enough to reproduce it.
 struct Provenance {
   std::string version;     ///< qm3d version that computed it
+  std::string reproduces;  ///< MetricSpec::reproduces of the metric (empty: none)
   std::string reference;   ///< the reference's file (or a description of in-memory data)
   std::string distorted;   ///< the distorted object's file (or description)
   /// Every option used, the resolved table directory included (as the JSON output echoes it).
