@@ -32,9 +32,9 @@ fail() { log "FAIL: $*"; exit 1; }
   fail "$BUILD_DIR/CPackConfig.cmake: not a configured qm3d build directory"
 CMAKE="$(sed -n 's/^CMAKE_COMMAND:INTERNAL=//p' "$BUILD_DIR/CMakeCache.txt")"
 CPACK="$(dirname "$CMAKE")/cpack"
-for tool in "$CPACK" dpkg-deb dpkg-shlibdeps dpkg readelf ldd; do
+for tool in "$CPACK" dpkg-deb dpkg-shlibdeps dpkg file readelf ldd; do
   command -v "$tool" >/dev/null ||
-    { echo "test_deb: skipped: $tool not found (Debian packages cmake, dpkg-dev, binutils)"; exit 77; }
+    { echo "test_deb: skipped: $tool not found (Debian packages cmake, dpkg-dev, file, binutils)"; exit 77; }
 done
 
 SCRATCH="$(mktemp -d "${TMPDIR:-/tmp}/qm3d-deb.XXXXXX")"
@@ -64,13 +64,14 @@ expect_field Architecture "$ARCH"
 expect_field Section science
 for f in Maintainer Description Depends; do [ -n "$(field "$f")" ] || fail "no $f field"; done
 DEPENDS="$(field Depends)"
-depended() { tr ',|' '\n\n' <<<"$DEPENDS" | sed 's/^ *//; s/ .*//'; }  # package names
+depended() { tr ',|' '\n' <<<"$DEPENDS" | sed 's/^ *//; s/ .*//'; }  # package names
 depends_on() { depended | grep -Fqx "$1"; }
 for p in libc6 libstdc++6 libgomp1 python3 python3-numpy; do
   depends_on "$p" || fail "Depends does not name $p: $DEPENDS"
 done
-depended | grep -qx 'libpcl-common[0-9.]*' && depended | grep -qx 'libpcl-io[0-9.]*' ||
-  fail "Depends does not name PCL's run-time packages: $DEPENDS"
+for p in 'libpcl-common[0-9.]*' 'libpcl-io[0-9.]*'; do
+  depended | grep -qx "$p" || fail "Depends does not name PCL's $p: $DEPENDS"
+done
 
 # ---- contents: what `cmake --install` installs, the Python package in Debian's place ----
 quietly "$CMAKE" --install "$BUILD_DIR" --prefix "$SCRATCH/install/usr"
