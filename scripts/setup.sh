@@ -25,6 +25,7 @@ PACKAGES=(
   locales
   slurm-wlm munge
   chromium libjs-three
+  dpkg-dev file
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }

@@ -3,8 +3,9 @@
 #
 #   scripts/test.sh              # normal Release build in build/, then the installed package
 #                                # used by tests/downstream (scripts/test_downstream.sh),
-#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root) and
+#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root),
 #                                # HTML reports in headless Chromium (tests/report/test_report.sh)
+#                                # and the Debian package (tests/package/test_deb.sh)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -42,4 +43,8 @@ if [ ${#EXTRA[@]} -eq 0 ]; then
   report_rc=0
   bash "$ROOT/tests/report/test_report.sh" "$BUILD_DIR/apps/qm3d" || report_rc=$?
   [ "$report_rc" -eq 0 ] || [ "$report_rc" -eq 77 ] || exit "$report_rc"
+  # The Debian package (cpack -G DEB) installed into a scratch root (exit 77: skipped, no dpkg-dev).
+  deb_rc=0
+  bash "$ROOT/tests/package/test_deb.sh" "$BUILD_DIR" || deb_rc=$?
+  [ "$deb_rc" -eq 0 ] || [ "$deb_rc" -eq 77 ] || exit "$deb_rc"
 fi
