@@ -3,8 +3,9 @@
 #
 #   scripts/test.sh              # normal Release build in build/, then the installed package
 #                                # used by tests/downstream (scripts/test_downstream.sh),
-#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root) and
+#                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root),
 #                                # HTML reports in headless Chromium (tests/report/test_report.sh)
+#                                # and the Python wheel in a fresh venv (tests/python_package/)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -42,4 +43,9 @@ if [ ${#EXTRA[@]} -eq 0 ]; then
   report_rc=0
   bash "$ROOT/tests/report/test_report.sh" "$BUILD_DIR/apps/qm3d" || report_rc=$?
   [ "$report_rc" -eq 0 ] || [ "$report_rc" -eq 77 ] || exit "$report_rc"
+  # `pip wheel` of a clean copy installed into a fresh venv (exit 77: skipped, no pip/venv or
+  # no Python package in the build).
+  wheel_rc=0
+  bash "$ROOT/tests/python_package/test_wheel.sh" "$BUILD_DIR" || wheel_rc=$?
+  [ "$wheel_rc" -eq 0 ] || [ "$wheel_rc" -eq 77 ] || exit "$wheel_rc"
 fi
