@@ -4,7 +4,9 @@
 # (numpy from Debian), `pip install` of that wheel into the venv, then, from another directory
 # with no PYTHONPATH: qm3d imports from the venv, finds the tables shipped in the wheel, scores a
 # bundled pair exactly as the build tree's package does, and a missing table directory or table
-# file is the same one-line InputError. Nothing is downloaded (--no-index, --no-build-isolation).
+# file is the same one-line InputError. Then a wheel built where no tables are found: it has
+# none, looks in the configured directory (the same error when absent) and scores the pair with
+# $QM3D_DATA_DIR. Nothing is downloaded (--no-index, --no-build-isolation).
 # Run by scripts/test.sh.
 #
 #   tests/python_package/test_wheel.sh [BUILD_DIR]      (default: build/)
@@ -57,11 +59,14 @@ quietly "$PY" -m venv --system-site-packages "$VENV"
 VPY="$VENV/bin/python"
 # The venv's interpreter builds (sys.executable differs from $PY; same version and ABI).
 # ccache keys on paths relative to $WORK, so a rerun of this test reuses the compiled objects.
+build_wheel() {  # OUT_DIR [VAR=VALUE...]: pip wheel in $SRC with those variables set
+  local out="$1"; shift
+  (cd "$SRC" && quietly env "$@" CCACHE_BASEDIR="$WORK" \
+     CMAKE_BUILD_PARALLEL_LEVEL="${QM3D_JOBS:-$(nproc)}" \
+     "$VPY" -m pip wheel . --no-build-isolation --no-deps --no-index --no-cache-dir -w "$out")
+}
 log "pip wheel (a full build of the libraries and the module; minutes without ccache)"
-(cd "$SRC" && CCACHE_BASEDIR="$WORK" QM3D_DATA_DIR="$TABLES" \
-   CMAKE_BUILD_PARALLEL_LEVEL="${QM3D_JOBS:-$(nproc)}" \
-   quietly "$VPY" -m pip wheel . --no-build-isolation --no-deps --no-index --no-cache-dir \
-   -w "$DIST")
+build_wheel "$DIST" QM3D_DATA_DIR="$TABLES"
 WHEEL="$(ls "$DIST"/qm3d-*.whl)"
 TAG="$("$VPY" -c 'import sys; print("cp%d%d" % sys.version_info[:2])')"
 [[ "$(basename "$WHEEL")" == qm3d-*-"$TAG"-"$TAG"-linux_*.whl ]] ||
@@ -123,4 +128,22 @@ EXPECT="LAB2000HL table directory $WORK/absent: not found (set --data-dir or QM3
 check_error env QM3D_DATA_DIR="$WORK/absent" "$VPY" -c "$ERROR" "$REF" "$DIST_CLOUD"
 EXPECT="LAB2000HL table $WORK/four_tables/RegularGrid_0_0_2.txt: cannot open (set --data-dir"*
 check_error "$VPY" -c "$ERROR" "$REF" "$DIST_CLOUD" "$WORK/four_tables"
+
+# A wheel built where no tables are found: none inside (none left from the first build either),
+# the configured directory is where it looks, and a missing one is the same error.
+log "pip wheel without tables (the same build directory: one source file rebuilt)"
+build_wheel "$WORK/dist-no-tables" QM3D_CMAKE_ARGS="-DQM3D_DEFAULT_DATA_DIR=$WORK/absent"
+"$VPY" -c 'import sys, zipfile
+names = zipfile.ZipFile(sys.argv[1]).namelist()
+tables = [n for n in names if "lab2000hl" in n]
+sys.exit(f"{tables}" if tables else 0)' "$WORK"/dist-no-tables/qm3d-*.whl ||
+  fail "the wheel built without tables has the files above"
+quietly "$VPY" -m pip install --no-index --no-deps --no-cache-dir --force-reinstall \
+  "$WORK"/dist-no-tables/qm3d-*.whl
+EXPECT="LAB2000HL table directory $WORK/absent: not found (set --data-dir or QM3D_DATA_DIR)"
+check_error env -u QM3D_DATA_DIR "$VPY" -c "$ERROR" "$REF" "$DIST_CLOUD"
+again=$(cd / && QM3D_DATA_DIR="$TABLES" "$VPY" -c "$SCORE" "$REF" "$DIST_CLOUD" 2>/dev/null) ||
+  fail "the wheel without tables could not score the pair with \$QM3D_DATA_DIR"
+[ "$again" = "$built" ] || fail "the wheel without tables scored $again, the build tree $built"
+log "ok   with \$QM3D_DATA_DIR: ${again%% *}"
 log "passed in $((SECONDS - START)) s"
