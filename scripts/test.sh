@@ -5,7 +5,8 @@
 #                                # used by tests/downstream (scripts/test_downstream.sh),
 #                                # the Slurm scripts (tests/slurm/test_slurm.sh, as root),
 #                                # HTML reports in headless Chromium (tests/report/test_report.sh)
-#                                # and the Debian package (tests/package/test_deb.sh)
+#                                # the Debian package (tests/package/test_deb.sh)
+#                                # and the Python wheel in a fresh venv (tests/python_package/)
 #   scripts/test.sh --sanitize   # AddressSanitizer + UBSan build in build-sanitize/
 set -euo pipefail
 
@@ -47,4 +48,9 @@ if [ ${#EXTRA[@]} -eq 0 ]; then
   deb_rc=0
   bash "$ROOT/tests/package/test_deb.sh" "$BUILD_DIR" || deb_rc=$?
   [ "$deb_rc" -eq 0 ] || [ "$deb_rc" -eq 77 ] || exit "$deb_rc"
+  # `pip wheel` of a clean copy installed into a fresh venv (exit 77: skipped, no pip/venv or
+  # no Python package in the build).
+  wheel_rc=0
+  bash "$ROOT/tests/python_package/test_wheel.sh" "$BUILD_DIR" || wheel_rc=$?
+  [ "$wheel_rc" -eq 0 ] || [ "$wheel_rc" -eq 77 ] || exit "$wheel_rc"
 fi

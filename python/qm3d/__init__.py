@@ -232,16 +232,20 @@ for _s in _qm3d.metrics():
     _SPECS[_s["name"]] = _s
 
 def _installed_tables():
-    """PREFIX/share/qm3d/lab2000hl beside an installed package (PREFIX/lib/python3.X/
+    """The tables installed with the package: qm3d/lab2000hl inside it (a wheel, setup.py),
+    else PREFIX/share/qm3d/lab2000hl beside a package installed by CMake (PREFIX/lib/python3.X/
     dist-packages/qm3d), as the installed tool finds its tables; None elsewhere (a build tree)."""
     here = _os.path.dirname(_os.path.realpath(__file__))
     prefix = _os.path.dirname(_os.path.dirname(_os.path.dirname(_os.path.dirname(here))))
-    tables = _os.path.join(prefix, "share", "qm3d", "lab2000hl")
-    return tables if _os.path.isfile(_os.path.join(tables, "L_data.txt")) else None
+    for tables in (_os.path.join(here, "lab2000hl"),
+                   _os.path.join(prefix, "share", "qm3d", "lab2000hl")):
+        if _os.path.isfile(_os.path.join(tables, "L_data.txt")):
+            return tables
+    return None
 
 
-# The tables: data_dir=, else $QM3D_DATA_DIR, else an installation's own, else the build-time
-# directory (the tool's order).
+# The tables: data_dir=, else $QM3D_DATA_DIR, else the installation's own (the wheel's, then
+# PREFIX/share), else the build-time directory (the tool's order).
 _DEFAULT_TABLES = None if _os.environ.get("QM3D_DATA_DIR") else _installed_tables()
 
 _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
@@ -360,7 +364,8 @@ _COMMON_DOC = """
         direction: "symmetric", "dist-to-ref" or "ref-to-dist" (default: {default}). {dhelp}
         threads: OpenMP threads (0 = all cores), as --threads; results do not depend on it.
         per_element: keep the per-vertex / per-point local distortion as numpy arrays.
-        data_dir: folder of the LAB2000HL tables (default: $QM3D_DATA_DIR, else the built-in).
+        data_dir: folder of the LAB2000HL tables (default: $QM3D_DATA_DIR, else the
+            installed package's own, else the folder configured when it was built).
         colour_scale: "auto", "unit" or "byte", as --colour-scale: the scale of colours stored
             as numbers in files (OBJ, OFF, PLY float). auto = the reference's rule (0..255 when
             any value is above 1; warns when few values decide), unit = 0..1 (values above 1
