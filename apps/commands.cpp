@@ -1,11 +1,23 @@
 #include "commands.h"
 
+#include <iostream>
+
 #include "distortion_map.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/pointcloud/metrics.h"
 
 namespace qm3d::app {
+
+void emit_text(const std::string& text, const std::string& output) {
+  if (output.empty()) {
+    std::cout << text << std::flush;
+    if (!std::cout) throw InputError("stdout: write failed");
+    return;
+  }
+  write_file_atomically(output, [&](std::ostream& out) { out << text; });
+}
 
 const Registry& registry() {
   static const Registry r = [] {

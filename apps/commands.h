@@ -15,6 +15,10 @@ namespace qm3d::app {
 /// The tool's metrics: the mesh module's, then the point-cloud module's.
 const Registry& registry();
 
+/// Writes a command's output: to stdout (a failed write, e.g. a closed pipe, is an InputError) or,
+/// atomically, to `output` when it is not empty.
+void emit_text(const std::string& text, const std::string& output);
+
 /// What a scoring command asks for, for every metric it runs.
 struct ScoreRequest {
   RunOptions run;  ///< model unset: see `model`

@@ -273,14 +273,6 @@ std::string eval_text(const EvalData& d, const EvaluationResult& r, const EvalCo
   return out.str();
 }
 
-void emit_text(const std::string& text, const std::string& output) {
-  if (output.empty()) {
-    std::cout << text << std::flush;
-    if (!std::cout) throw InputError("stdout: write failed");
-    return;
-  }
-  write_file_atomically(output, [&](std::ostream& out) { out << text; });
-}
 
 void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& path) {
   ScatterPlot p{d.scores, d.mos, r.fit.function, "", "", ""};

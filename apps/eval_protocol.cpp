@@ -385,14 +385,6 @@ std::string protocol_csv(const ordered_json& j, const std::vector<std::string>& 
   return out.str();
 }
 
-void emit(const std::string& text, const std::string& output) {
-  if (output.empty()) {
-    std::cout << text << std::flush;
-    if (!std::cout) throw InputError("stdout: write failed");
-    return;
-  }
-  write_file_atomically(output, [&](std::ostream& out) { out << text; });
-}
 
 // A metric's name as part of a file name.
 std::string file_part(const std::string& name) {
@@ -604,7 +596,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
     }
   }
   if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, j, o.mos_column);
-  emit(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
+  emit_text(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
        o.output);
   return 0;
 }

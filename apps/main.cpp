@@ -79,15 +79,6 @@ void add_output_options(CLI::App* cmd, OutputOptions& o, bool with_map) {
   }
 }
 
-// Writes text to stdout or, atomically, to the requested file.
-void emit(const std::string& text, const std::string& output) {
-  if (output.empty()) {
-    std::cout << text << std::flush;
-    if (!std::cout) throw InputError("stdout: write failed");
-    return;
-  }
-  write_file_atomically(output, [&](std::ostream& out) { out << text; });
-}
 
 void print_warnings(const std::vector<MetricResult>& results, bool quiet) {
   if (quiet) return;
@@ -178,7 +169,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
     for (std::size_t i = 0; i < results.size(); ++i) entries.push_back({chosen[i], &results[i]});
     write_html_report(cli.report.file, entries, ref, dist, *report);
   }
-  emit(render(results, cli.out, c.spec == nullptr), c.report ? std::string() : cli.out.output);
+  emit_text(render(results, cli.out, c.spec == nullptr), c.report ? std::string() : cli.out.output);
   return kExitOk;
 }
 
