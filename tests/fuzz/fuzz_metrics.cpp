@@ -1,4 +1,4 @@
-// Fuzzes CMDM, MSDM2 and PCQM on tiny meshes built from the input bytes: up to 10 vertices with
+// Fuzzes CMDM, MSDM2, PCQM and pc_error's PSNR on tiny meshes built from the input bytes: up to 10 vertices with
 // small integer coordinates (so coincident points, zero-area and non-manifold faces are common),
 // colours, and up to 12 faces. Any outcome but a qm3d::Error or std::invalid_argument is a bug.
 #include <cstdint>
@@ -9,6 +9,7 @@
 #include "qm3d/mesh/cmdm.h"
 #include "qm3d/mesh/msdm2.h"
 #include "qm3d/pointcloud/pcqm.h"
+#include "qm3d/pointcloud/psnr.h"
 
 namespace {
 
@@ -62,6 +63,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     p.knn = 1 + in.next() % 6;
     p.direction = qm3d::Direction::kSymmetric;
     qm3d::pointcloud::compute_pcqm(qm3d::vertex_cloud(a), qm3d::vertex_cloud(b), p);
+  } catch (const qm3d::Error&) {
+  } catch (const std::invalid_argument&) {
+  }
+  // PSNR on the vertices: coincident points (duplicate merging, the tie chain), the automatic
+  // peak of clouds with no two distinct points, estimated or fuzzed normals (zero ones included).
+  try {
+    namespace pc = qm3d::pointcloud;
+    pc::PsnrOptions o;
+    o.colour_space = static_cast<pc::PsnrColourSpace>(in.next() % 3);
+    o.duplicates = static_cast<pc::DuplicatePoints>(in.next() % 3);
+    o.tied = static_cast<pc::TiedNeighbours>(1 + in.next() % 2);
+    o.average_normals = in.next() % 2 == 0;
+    o.estimate_normals = in.next() % 4 == 0;
+    if (in.next() % 2) o.peak = 1 + in.next() % 1023;
+    const qm3d::ColoredCloud ca = qm3d::vertex_cloud(a);
+    pc::ReferenceNormals normals;
+    if (!o.estimate_normals && in.next() % 2) {
+      for (std::size_t i = 0; i < ca.positions.size(); ++i) {
+        normals.normals.push_back({(in.next() % 3) - 1.0, (in.next() % 3) - 1.0, (in.next() % 3) - 1.0});
+      }
+    }
+    pc::compute_psnr(ca, normals, qm3d::vertex_cloud(b), o, "a", "b");
   } catch (const qm3d::Error&) {
   } catch (const std::invalid_argument&) {
   }
