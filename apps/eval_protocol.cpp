@@ -493,6 +493,18 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
       if (v && std::isfinite(*v)) values[s][j.keys[i]] = *v;
     }
   }
+  // A series without a single finite score (a failed batch pair's "compare" row, a column of
+  // text) is left out with a warning rather than emptying the stimuli every series must share.
+  for (std::size_t k = series.size(); k-- > 0;) {
+    if (!values[k].empty()) continue;
+    if (!quiet) {
+      std::cerr << "qm3d: warning: " << o.scores << ": " << series[k].name
+                << " has no finite score on the stimuli of " << o.mos << "; left out\n";
+    }
+    series.erase(series.begin() + static_cast<std::ptrdiff_t>(k));
+    values.erase(values.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  if (series.empty()) throw FormatError(o.scores + ": no finite score of any metric");
   std::map<std::string, std::size_t> mos_row;
   for (std::size_t i = 0; i < joins[0].keys.size(); ++i) mos_row[joins[0].keys[i]] = joins[0].right[i];
   for (std::size_t p = 1; p < joins.size(); ++p) {

@@ -393,10 +393,13 @@ TEST_F(EvalCli, BatchFileOfSeveralMetricsIsOneColumnPerMetric) {
     batch += "r.ply," + d + ",psnr," + exact(20 + 4 * k - 0.5 * (k % 3)) + ",ok\n";
     mos += d + "," + exact(q[k]) + ",0.6,20\n";
   }
+  batch += "r.ply,s9.ply,compare,,error\n";  // a failed pair of `compare`: no metric column
+  mos += "s9.ply,3,0.6,20\n";
   const fs::path b = file("results.csv", batch), m = file("mos.csv", mos);
   const CliRun run = qm3d("eval " + b.string() + " " + m.string() +
                           " --sd-column sd --n-column n --bootstrap 0 --json");
   ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.err.find("compare has no finite score"), std::string::npos) << run.err;
   const json j = json::parse(run.out);
   EXPECT_EQ(j["metrics"]["pcqm"]["orientation"]["higher_is_better"], false);
   EXPECT_EQ(j["metrics"]["psnr"]["orientation"]["higher_is_better"], true);
