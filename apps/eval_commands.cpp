@@ -341,6 +341,12 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "distortion); reported, and a warning when the scores rank the other way")
       ->check(CLI::IsMember({"auto", "distortion", "quality"}))
       ->capture_default_str();
+  cmd->add_option("--more-scores", o.more_scores,
+                  "More SCORES files (repeatable): their score columns (or batch metrics) are "
+                  "compared with SCORES's, joined on the same key; a name already taken gets "
+                  "its file's stem in front (run2:psnr)")
+      ->type_name("FILE")
+      ->allow_extra_args(false);
   cmd->add_option("--lower-is-better", o.lower_is_better,
                   "Score columns that are distortions, for Krasula's analysis (registered "
                   "metrics are oriented by themselves; other columns are taken as qualities)")

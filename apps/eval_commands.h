@@ -29,6 +29,7 @@ struct EvalCommandOptions {
   std::string pairs;                ///< first, second, label
   std::string group_column;         ///< MOS column: only pairs within a group
   std::string mapping;              ///< empty: the one-column logistic4 evaluation
+  std::vector<std::string> more_scores;  ///< more SCORES files, their metrics beside SCORES's
   std::size_t bootstrap = 1000;
   std::uint64_t seed = 1;
   bool json = false, csv = false;

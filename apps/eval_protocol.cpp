@@ -8,6 +8,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <deque>
 #include <set>
 #include <sstream>
 
@@ -436,7 +437,7 @@ void plot_protocol(const std::string& path, const std::vector<MetricScores>& met
 
 bool needs_protocol(const EvalCommandOptions& o) {
   return o.scores_column.find(',') != std::string::npos || o.scores_column == "all" ||
-         !o.mapping.empty() ||
+         !o.mapping.empty() || !o.more_scores.empty() ||
          !o.sd_column.empty() || !o.raw.empty() || !o.pairs.empty() ||
          split_by_metric(read_csv_table(o.scores)).size() > 1;
 }
@@ -453,22 +454,37 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
   const auto ci = o.ci_column.empty() ? std::nullopt
                                       : std::optional(require_column(mos, o.ci_column, "--ci-column"));
 
-  // The tables of the series: SCORES, or its rows of each metric.
-  std::vector<std::pair<std::string, CsvTable>> parts = split_by_metric(scores);
-  if (parts.empty()) parts.push_back({single_metric(scores), scores});
-  const bool pivot = parts.size() > 1;
-  std::vector<JoinedRows> joins;
-  for (const auto& [metric, table] : parts) {
-    joins.push_back(join_on_key(table, key, mos, mos_key, o.stem));
+  // The tables of the series: each SCORES file (SCORES, then --more-scores), or its rows of each
+  // metric. Deques: the series point into them.
+  struct Part {
+    std::string metric;
+    CsvTable table;
+    std::size_t key = 0;
+    bool pivot = false;
+  };
+  std::deque<Part> parts;
+  std::vector<CsvTable> files = {scores};
+  for (const std::string& f : o.more_scores) files.push_back(read_csv_table(f));
+  for (const CsvTable& t : files) {
+    const std::size_t k = &t == &files.front() ? key : key_column(t, o.scores_key, "--scores-key");
+    auto split = split_by_metric(t);
+    const bool pivot = !split.empty();
+    if (!pivot) split.push_back({single_metric(t), t});
+    for (auto& [metric, table] : split) parts.push_back({metric, std::move(table), k, pivot});
+  }
+  std::deque<JoinedRows> joins;
+  for (const Part& part : parts) {
+    joins.push_back(join_on_key(part.table, part.key, mos, mos_key, o.stem));
   }
   std::vector<Series> series;
+  std::set<std::string> names_taken;
   for (std::size_t p = 0; p < parts.size(); ++p) {
-    const CsvTable& t = parts[p].second;
+    const CsvTable& t = parts[p].table;
     std::vector<std::size_t> columns;
     if (o.scores_column == "all") {
-      columns = numeric_columns(t, key);
+      columns = numeric_columns(t, parts[p].key);
     } else if (o.scores_column.empty()) {
-      columns.push_back(value_column(t, "", {"score"}, key, "--scores-column"));
+      columns.push_back(value_column(t, "", {"score"}, parts[p].key, "--scores-column"));
     } else {
       for (const std::string& c : split_list(o.scores_column)) {
         columns.push_back(require_column(t, c, "--scores-column"));
@@ -477,8 +493,11 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
     for (std::size_t c : columns) {
       const std::string& header = t.header[c];
       std::string name = header;
-      if (pivot) name = header == "score" ? parts[p].first : parts[p].first + ":" + header;
-      series.push_back({name, &t, c, parts[p].first, &joins[p]});
+      if (parts[p].pivot) name = header == "score" ? parts[p].metric : parts[p].metric + ":" + header;
+      // The same name from another file: its file stem in front ("run2:psnr").
+      if (names_taken.count(name)) name = fs::path(t.path).stem().string() + ":" + name;
+      names_taken.insert(name);
+      series.push_back({name, &t, c, parts[p].metric, &joins[p]});
     }
   }
   if (series.empty()) throw FormatError(o.scores + ": no numeric score column");
@@ -539,9 +558,9 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
   }
   if (!quiet) {
     for (std::size_t p = 0; p < joins.size(); ++p) {
-      const std::string what = pivot ? " (" + parts[p].first + ")" : "";
+      const std::string what = parts[p].pivot ? " (" + parts[p].metric + ")" : "";
       if (joins[p].left_only.count) {
-        std::cerr << "qm3d: warning: " << scores.path << what << ": " << joins[p].left_only.count
+        std::cerr << "qm3d: warning: " << parts[p].table.path << what << ": " << joins[p].left_only.count
                   << " rows have no partner in " << mos.path << ": "
                   << joins[p].left_only.examples() << "\n";
       }
@@ -583,6 +602,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
   options.mapping = parse_mapping(o.mapping.empty() ? "logistic4" : o.mapping);
   ordered_json j = {{"command", "eval"}, {"version", kVersion}};
   j["scores"] = {{"file", scores.path}, {"key", scores.header[key]}, {"rows", scores.rows.size()}};
+  j["more_scores"] = o.more_scores;
   j["mos"] = {{"file", mos.path},
               {"key", mos.header[mos_key]},
               {"column", mos.header[mos_value]},

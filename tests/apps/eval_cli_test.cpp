@@ -348,6 +348,34 @@ TEST_F(EvalCli, KrasulaOnTheToyamaVectorsFromMosSdAndN) {
   EXPECT_NE(csv.out.find("m1,m2,delong_auc_ds_p,"), std::string::npos) << csv.out;
 }
 
+// Metrics in separate files (--more-scores) give what one file of both columns gives; a name
+// taken already gets its file's stem in front.
+TEST_F(EvalCli, MoreScoresFilesAreComparedWithTheFirst) {
+  std::string a = "stimulus,psnr\n", b = "stimulus,ssim\n", same = "stimulus,psnr\n";
+  for (const auto& e : reference_rows("toyama_krasula_stimuli.csv")) {
+    a += e.at("stimulus") + "," + e.at("psnr") + "\n";
+    b += e.at("stimulus") + "," + e.at("ssim") + "\n";
+    same += e.at("stimulus") + "," + e.at("ssim") + "\n";
+  }
+  const fs::path fa = file("a.csv", a), fb = file("b.csv", b), fs2 = file("run2.csv", same);
+  const std::string table = (evaluation_dir() / "toyama_krasula_stimuli.csv").string();
+  const std::string common = " --scores-key stimulus --mos-column MOS --sd-column SD "
+                             "--n-column num_obs --bootstrap 0 --json";
+  const CliRun one = qm3d("eval " + table + " " + table + " --scores-column psnr,ssim" + common);
+  const CliRun two = qm3d("eval " + fa.string() + " " + table + " --more-scores " + fb.string() + common);
+  ASSERT_EQ(one.code, 0) << one.err;
+  ASSERT_EQ(two.code, 0) << two.err;
+  const json j1 = json::parse(one.out), j2 = json::parse(two.out);
+  EXPECT_EQ(j1["metrics"], j2["metrics"]);
+  EXPECT_EQ(j1["comparisons"], j2["comparisons"]);
+  const CliRun clash = qm3d("eval " + fa.string() + " " + table + " --more-scores " + fs2.string() + common);
+  ASSERT_EQ(clash.code, 0) << clash.err;
+  const json j3 = json::parse(clash.out);
+  EXPECT_TRUE(j3["metrics"].contains("psnr"));
+  EXPECT_TRUE(j3["metrics"].contains("run2:psnr"));
+  EXPECT_EQ(j3["metrics"]["run2:psnr"]["krasula"], j1["metrics"]["ssim"]["krasula"]);
+}
+
 // VMAF's raw-score test from a long-format file of individual scores.
 TEST_F(EvalCli, KrasulaFromIndividualScoresAsVmaf) {
   std::string scores = "stimulus,a,b\n", raw = "stimulus,observer,score\n", mos = "stimulus,mos\n";
