@@ -114,9 +114,9 @@ void find_orientation(EvalData& d, const EvalCommandOptions& o) {
   if (d.higher_is_better) d.orientation_source = "metric column: " + metric;
 }
 
-EvalData load_eval_data(const EvalCommandOptions& o) {
+EvalData load_eval_data(const EvalCommandOptions& o, CsvTable scores) {
   EvalData d;
-  d.scores_table = read_csv_table(o.scores);
+  d.scores_table = std::move(scores);
   d.mos_table = read_csv_table(o.mos);
   d.scores_key = key_column(d.scores_table, o.scores_key, "--scores-key");
   d.scores_value =
@@ -287,9 +287,10 @@ void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& 
 }
 
 int run_eval(const EvalCommandOptions& o, bool quiet) {
-  if (needs_protocol(o)) return run_eval_protocol(o, quiet);
   check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
-  const EvalData d = load_eval_data(o);
+  CsvTable scores = read_csv_table(o.scores);
+  if (needs_protocol(o, scores)) return run_eval_protocol(o, scores, quiet);
+  const EvalData d = load_eval_data(o, std::move(scores));
   warn_partial_join(d, quiet);
   EvaluationOptions options;
   options.bootstrap = o.bootstrap;

@@ -52,11 +52,12 @@ struct Series {
   const JoinedRows* join = nullptr;
 };
 
-/// The SCORES rows of each metric of its `metric` column, when it names several (batch results
-/// of several metrics: one row per pair and metric); empty otherwise.
+/// The rows of each metric of a SCORES table's `metric` column, in the order they first appear
+/// (batch results: one row per pair and metric; one part when every row names the same metric);
+/// the whole table under an empty name when it has no metric column.
 std::vector<std::pair<std::string, CsvTable>> split_by_metric(const CsvTable& t) {
   const auto column = find_column(t, "metric");
-  if (!column) return {};
+  if (!column) return {{"", t}};
   std::vector<std::pair<std::string, CsvTable>> parts;
   std::map<std::string, std::size_t> at;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
@@ -66,7 +67,7 @@ std::vector<std::pair<std::string, CsvTable>> split_by_metric(const CsvTable& t)
     parts[it->second].second.rows.push_back(t.rows[r]);
     parts[it->second].second.line_numbers.push_back(t.line_numbers[r]);
   }
-  if (parts.size() < 2) return {};
+  if (parts.empty()) parts.push_back({"", t});  // a header without rows
   return parts;
 }
 
@@ -126,23 +127,18 @@ void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
   m.orientation_source = "assumed: not a registered metric";
 }
 
-// The metric every row of a table names in its metric column, or empty.
-std::string single_metric(const CsvTable& t) {
-  const auto column = find_column(t, "metric");
-  if (!column || t.rows.empty()) return "";
-  const std::string& first = t.rows[0][*column];
-  for (const auto& row : t.rows) {
-    if (row[*column] != first) return "";
-  }
-  return first;
-}
-
 // ---- the subjective data -------------------------------------------------------------------
 
 /// What the MOS file and the extra files say of the kept stimuli.
 struct Stimuli {
   std::vector<std::string> keys;
   std::vector<std::size_t> mos_rows;  ///< row of each in the MOS table
+  std::map<std::string, std::size_t> index;  ///< key -> its place in `keys`
+  void add(const std::string& key, std::size_t mos_row) {
+    index.emplace(key, keys.size());
+    keys.push_back(key);
+    mos_rows.push_back(mos_row);
+  }
 };
 
 double required_number(const CsvTable& t, std::size_t row, std::size_t column,
@@ -195,13 +191,11 @@ PairLabels pairs_from_raw(const EvalCommandOptions& o, const Stimuli& st,
   const CsvTable raw = read_csv_table(o.raw);
   const std::size_t key = find_column(raw, "stimulus").value_or(0);
   const std::size_t score = find_column(raw, "score").value_or(raw.header.size() - 1);
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < st.keys.size(); ++i) index[st.keys[i]] = i;
   std::vector<std::vector<double>> scores(st.keys.size());
   for (std::size_t r = 0; r < raw.rows.size(); ++r) {
     const std::string k = o.stem ? stem_of(raw.rows[r][key]) : raw.rows[r][key];
-    const auto it = index.find(k);
-    if (it == index.end()) {
+    const auto it = st.index.find(k);
+    if (it == st.index.end()) {
       throw FormatError(raw.path + ":" + std::to_string(raw.line_numbers[r]) + ": stimulus \"" +
                         raw.rows[r][key] + "\" is not among the evaluated stimuli");
     }
@@ -230,8 +224,6 @@ PairLabels pairs_from_file(const EvalCommandOptions& o, const Stimuli& st) {
   const std::size_t a = find_column(t, "first").value_or(0);
   const std::size_t b = find_column(t, "second").value_or(1);
   const std::size_t l = find_column(t, "label").value_or(2);
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < st.keys.size(); ++i) index[st.keys[i]] = i;
   PairLabels pairs;
   pairs.rule = "given (" + t.path + ")";
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
@@ -239,8 +231,8 @@ PairLabels pairs_from_file(const EvalCommandOptions& o, const Stimuli& st) {
     std::size_t ij[2];
     for (int k = 0; k < 2; ++k) {
       const std::string& cell = t.rows[r][k == 0 ? a : b];
-      const auto it = index.find(o.stem ? stem_of(cell) : cell);
-      if (it == index.end()) {
+      const auto it = st.index.find(o.stem ? stem_of(cell) : cell);
+      if (it == st.index.end()) {
         throw FormatError(where + ": stimulus \"" + cell + "\" is not among the evaluated stimuli");
       }
       ij[k] = it->second;
@@ -397,56 +389,51 @@ std::string file_part(const std::string& name) {
 // --plot FILE.svg|png: FILE-NAME.svg|png, a scatter per metric, and with Krasula's analysis
 // FILE-auc.svg, the AUC summary (always SVG).
 void plot_protocol(const std::string& path, const std::vector<MetricScores>& metrics,
-                   const SubjectiveData& subjective, const ordered_json& j,
-                   const std::string& mos_label) {
+                   const SubjectiveData& subjective, const ProtocolResult& r,
+                   const ordered_json& j, const std::string& mos_label) {
   const fs::path base(path);
   const auto sibling = [&](const std::string& part, const std::string& ext) {
     return base.parent_path() / (base.stem().string() + "-" + file_part(part) + ext);
   };
   AucPlot auc;
-  for (const MetricScores& m : metrics) {
-    const ordered_json& mj = j["metrics"][m.name];
-    MappingFunction map{parse_mapping(mj["mapping"]["name"].get<std::string>()), {}};
-    for (const auto& v : mj["mapping"]["parameters"]) map.parameters.push_back(v.is_number() ? v.get<double>() : NAN);
+  for (std::size_t i = 0; i < metrics.size(); ++i) {
+    const MetricScores& m = metrics[i];
+    const ordered_json& statistics = j["metrics"][m.name]["statistics"];
+    const MappingFunction& map = r.p1401[i].fit.function;
     ScatterPlot p{m.scores, subjective.mos, map,
-                  m.name + ": PLCC " + fixed(mj["statistics"]["plcc"]["value"], "%.3f") +
-                      ", SROCC " + fixed(mj["statistics"]["srocc"]["value"], "%.3f") + ", " +
-                      mj["mapping"]["name"].get<std::string>() + " mapping",
+                  m.name + ": PLCC " + fixed(statistics["plcc"]["value"], "%.3f") + ", SROCC " +
+                      fixed(statistics["srocc"]["value"], "%.3f") + ", " +
+                      std::string(mapping_name(map.mapping)) + " mapping",
                   m.name, mos_label.empty() ? "MOS" : mos_label};
     write_scatter_plot(sibling(m.name, base.extension().string()), p);
-    if (!mj["krasula"].is_null()) {
-      const auto v = [&](const char* k) {
-        return mj["krasula"][k].is_number() ? mj["krasula"][k].get<double>() : NAN;
-      };
+    if (r.krasula) {
+      const KrasulaMetric& k = r.krasula->metrics[i];
       auc.names.push_back(m.name);
-      auc.auc_ds.push_back(v("auc_ds"));
-      auc.se_ds.push_back(v("se_ds"));
-      auc.auc_bw.push_back(v("auc_bw"));
-      auc.se_bw.push_back(v("se_bw"));
+      auc.auc_ds.push_back(k.auc_ds);
+      auc.se_ds.push_back(k.se_ds);
+      auc.auc_bw.push_back(k.auc_bw);
+      auc.se_bw.push_back(k.se_bw);
     }
   }
-  if (!auc.names.empty()) {
-    auc.title = "Krasula's AUCs (" + std::to_string(j["krasula"]["different"].get<std::size_t>()) +
-                " different, " + std::to_string(j["krasula"]["similar"].get<std::size_t>()) +
-                " similar pairs)";
+  if (r.krasula) {
+    auc.title = "Krasula's AUCs (" + std::to_string(r.krasula->different) + " different, " +
+                std::to_string(r.krasula->similar) + " similar pairs)";
     write_auc_plot(sibling("auc", ".svg"), auc);
   }
 }
 
 }  // namespace
 
-bool needs_protocol(const EvalCommandOptions& o) {
+bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores) {
   return o.scores_column.find(',') != std::string::npos || o.scores_column == "all" ||
          !o.mapping.empty() || !o.more_scores.empty() ||
          !o.sd_column.empty() || !o.raw.empty() || !o.pairs.empty() ||
-         split_by_metric(read_csv_table(o.scores)).size() > 1;
+         split_by_metric(scores).size() > 1;
 }
 
-int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
-  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
+int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet) {
   const int sources = !o.sd_column.empty() + !o.raw.empty() + !o.pairs.empty();
   if (sources > 1) throw InputError("give one of --sd-column, --raw and --pairs");
-  const CsvTable scores = read_csv_table(o.scores);
   const CsvTable mos = read_csv_table(o.mos);
   const std::size_t key = key_column(scores, o.scores_key, "--scores-key");
   const std::size_t mos_key = o.mos_key.empty() ? 0 : require_column(mos, o.mos_key, "--mos-key");
@@ -468,8 +455,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
   for (const CsvTable& t : files) {
     const std::size_t k = &t == &files.front() ? key : key_column(t, o.scores_key, "--scores-key");
     auto split = split_by_metric(t);
-    const bool pivot = !split.empty();
-    if (!pivot) split.push_back({single_metric(t), t});
+    const bool pivot = split.size() > 1;
     for (auto& [metric, table] : split) parts.push_back({metric, std::move(table), k, pivot});
   }
   std::deque<JoinedRows> joins;
@@ -524,19 +510,16 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
     values.erase(values.begin() + static_cast<std::ptrdiff_t>(k));
   }
   if (series.empty()) throw FormatError(o.scores + ": no finite score of any metric");
+  // Every joined key once, in the order the parts first name it, with its MOS row.
   std::map<std::string, std::size_t> mos_row;
-  for (std::size_t i = 0; i < joins[0].keys.size(); ++i) mos_row[joins[0].keys[i]] = joins[0].right[i];
-  for (std::size_t p = 1; p < joins.size(); ++p) {
-    for (std::size_t i = 0; i < joins[p].keys.size(); ++i) mos_row.emplace(joins[p].keys[i], joins[p].right[i]);
+  std::vector<std::string> candidates;
+  for (const auto& j : joins) {
+    for (std::size_t i = 0; i < j.keys.size(); ++i) {
+      if (mos_row.emplace(j.keys[i], j.right[i]).second) candidates.push_back(j.keys[i]);
+    }
   }
   Stimuli st;
   SubjectiveData subjective;
-  std::vector<std::string> candidates;
-  for (const auto& j : joins) {
-    for (const std::string& k : j.keys) {
-      if (std::find(candidates.begin(), candidates.end(), k) == candidates.end()) candidates.push_back(k);
-    }
-  }
   for (const std::string& k : candidates) {
     const std::size_t row = mos_row.at(k);
     const auto m = cell_number(mos, row, mos_value);
@@ -547,8 +530,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
       left_out.add(k);
       continue;
     }
-    st.keys.push_back(k);
-    st.mos_rows.push_back(row);
+    st.add(k, row);
     subjective.mos.push_back(*m);
     if (ci) subjective.ci95.push_back(*c);
   }
@@ -610,7 +592,8 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
               {"rows", mos.rows.size()}};
   j["key_match"] = o.stem ? "file stem" : "exact";
   j["left_out"] = {{"count", left_out.count}, {"first", left_out.first}};
-  j.update(evaluate_metrics(metrics, subjective, options));
+  const ProtocolResult result = run_protocol(metrics, subjective, options);
+  j.update(protocol_json(metrics, subjective, result));
   j["bootstrap"] = {{"replicates", o.bootstrap},
                     {"seed", o.seed},
                     {"confidence", kConfidence},
@@ -627,7 +610,7 @@ int run_eval_protocol(const EvalCommandOptions& o, bool quiet) {
                 << " Krasula's BW analysis and C0 depend on it\n";
     }
   }
-  if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, j, o.mos_column);
+  if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, result, j, o.mos_column);
   emit_text(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
        o.output);
   return 0;

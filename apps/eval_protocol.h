@@ -4,14 +4,16 @@
 #pragma once
 
 #include "eval_commands.h"
+#include "score_table.h"
 
 namespace qm3d::app {
 
 /// True when `eval` needs the protocol (several score columns, a batch file of several metrics,
 /// or subjective data for Krasula's analysis) rather than the one-column evaluation.
-bool needs_protocol(const EvalCommandOptions& o);
+bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores);
 
-/// Runs it; the exit code (warnings on stderr unless `quiet`).
-int run_eval_protocol(const EvalCommandOptions& o, bool quiet);
+/// Runs it on `scores` (the SCORES file, read); the exit code (warnings on stderr unless
+/// `quiet`).
+int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet);
 
 }  // namespace qm3d::app

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "qm3d/common/evaluation.h"
+#include "qm3d/common/p1401.h"  // two_sided_normal_p
 
 namespace qm3d {
 namespace {
@@ -117,8 +118,6 @@ double delong_z(const std::vector<double>& aucs, const std::vector<double>& cov,
 }
 
 }  // namespace
-
-double two_sided_normal_p(double z) { return std::erfc(std::fabs(z) / std::sqrt(2.0)); }
 
 PairLabels label_pairs_j149(const std::vector<double>& mos, const std::vector<double>& sd,
                             const std::vector<double>& n, const std::vector<std::string>& groups) {

@@ -496,8 +496,6 @@ Statistic proportion_with_interval(double ratio, std::size_t n) {
   return {ratio, Interval{std::max(0.0, ratio - half), std::min(1.0, ratio + half)}};
 }
 
-double two_sided_normal_p(double z) { return std::erfc(std::fabs(z) / std::sqrt(2.0)); }
-
 }  // namespace
 
 // ---- public: mappings -------------------------------------------------------------------------
@@ -721,6 +719,8 @@ P1401Comparison compare_p1401(const P1401Statistics& a, const P1401Statistics& b
 // ---- public: distribution functions -----------------------------------------------------------
 
 double normal_sf(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
+
+double two_sided_normal_p(double z) { return std::erfc(std::fabs(z) / std::sqrt(2.0)); }
 
 double regularized_gamma_p(double a, double x) {
   check_gamma_arguments(a, x);

@@ -105,7 +105,4 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differenc
 KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
                                const PairLabels& pairs);
 
-/// 2 (1 - Phi(|z|)) without cancellation (erfc): tiny but non-zero where 1 - Phi underflows.
-double two_sided_normal_p(double z);
-
 }  // namespace qm3d

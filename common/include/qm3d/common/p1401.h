@@ -213,6 +213,10 @@ P1401Comparison compare_p1401(const P1401Statistics& a, const P1401Statistics& b
 /// tail down to the smallest doubles).
 double normal_sf(double z);
 
+/// 2 P(Z > |z|) = erfc(|z| / sqrt 2), the two-sided p of a z statistic, without the
+/// cancellation of 2 (1 - Phi(|z|)): tiny but non-zero where 1 - Phi underflows.
+double two_sided_normal_p(double z);
+
 /// Regularized lower incomplete gamma P(a, x) = gamma(a, x) / Gamma(a), by its series for
 /// x < a + 1 and 1 - Q otherwise (Numerical Recipes, 3rd ed., §6.2).
 /// @throws NumericError  a <= 0, x < 0, or not finite
