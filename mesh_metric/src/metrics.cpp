@@ -2,6 +2,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/mesh/grid_sampling.h"
 #include "qm3d/mesh/mesh_io.h"
 #include "qm3d/mesh/sampling.h"
 #include "qm3d/mesh/texture.h"
@@ -52,6 +53,28 @@ ColoredCloud sample(const Input& input, const SurfaceSampling& s) {
   }
 }
 
+// mmetric's grid samples of a mesh input: a textured OBJ from its texture (as mmetric with
+// --inputMap), else its vertex colours (none: geometry only).
+GridSamples grid_sample(const Input& input, const GridSamplingOptions& o) {
+  if (!input.is_mesh()) {
+    throw FormatError(input.name() + ": a point cloud, not a mesh (grid sampling needs faces)");
+  }
+  try {
+    if (!input.path().empty() && input.format() == FileFormat::kObj) {
+      const std::string bytes = read_file_bytes(input.path());
+      if (obj_is_textured(bytes)) return sample_grid(parse_textured_obj(bytes, input.path()), o);
+    }
+    const MeshData& m = input.mesh();
+    if (!m.has_colors) {
+      ColoredMesh geometry{m.mesh.positions, {}, m.mesh.triangles};
+      return sample_grid(geometry, o);
+    }
+    return sample_grid(m.mesh, o);
+  } catch (const NumericError& e) {
+    throw NumericError(input.name() + ": " + e.what());
+  }
+}
+
 }  // namespace
 
 void register_metrics(Registry& registry) {
@@ -61,6 +84,7 @@ void register_metrics(Registry& registry) {
     return read_mesh_vertices_data(path, mesh_format(format, path), options);
   };
   registry.set_sampler(sample);
+  registry.set_grid_sampler(grid_sample);
   registry.set_colour_matcher(match_surface_colours);
   registry.add(cmdm_spec());
   registry.add(msdm2_spec());

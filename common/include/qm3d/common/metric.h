@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "qm3d/common/color.h"
+#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/reading.h"
 #include "qm3d/common/result.h"
 #include "qm3d/common/types.h"
@@ -124,6 +125,9 @@ struct SurfaceSampling {
 };
 /// Samples an input's surface (textured OBJ files from their texture).
 using SurfaceSampler = std::function<ColoredCloud(const Input&, const SurfaceSampling&)>;
+/// Samples a mesh input on a grid as MPEG mmetric does (mesh/grid_sampling.h; textured OBJ
+/// files from their texture); FormatError naming the input when it is not a mesh.
+using GridSampler = std::function<GridSamples(const Input&, const GridSamplingOptions&)>;
 
 /// Each vertex of one mesh with its correspondence on another mesh's surface, as colours in
 /// LAB2000HL: `own[v]` the vertex's, `matched[v]` the one at its closest point on the other
@@ -246,6 +250,9 @@ class Registry {
   bool has_sampler() const { return static_cast<bool>(sampler_); }
   /// The surface sampler; std::logic_error when no module registered one.
   const SurfaceSampler& sampler() const;
+  /// The mesh module's grid sampler (mmetric's); empty when no module registered one.
+  void set_grid_sampler(GridSampler sampler) { grid_sampler_ = std::move(sampler); }
+  const GridSampler& grid_sampler() const { return grid_sampler_; }
   /// The mesh module's closest-point colour correspondence (D_LAB's mesh side); empty when no
   /// module registered one.
   void set_colour_matcher(SurfaceColourMatcher matcher) { colour_matcher_ = std::move(matcher); }
@@ -260,6 +267,7 @@ class Registry {
   std::vector<MetricSpec> metrics_;
   Readers readers_;
   SurfaceSampler sampler_;
+  GridSampler grid_sampler_;
   SurfaceColourMatcher colour_matcher_;
 };
 
