@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -28,8 +29,10 @@ struct PcErrorCase {
   std::vector<std::string> args;              ///< pc_error's options after -a A -b B
 };
 
-inline std::vector<PcErrorCase> pc_error_cases() {
-  std::ifstream in(reference_dir() / "mpeg" / "pc_error_reference.csv");
+/// The rows of one of the MPEG tables of shared/data/reference/mpeg/ (`args` = the compare
+/// options: pc_error's `args` column, mmetric's `compare_args`).
+inline std::vector<PcErrorCase> mpeg_cases(const std::string& table) {
+  std::ifstream in(reference_dir() / "mpeg" / table);
   const auto split = [](const std::string& line) {
     std::vector<std::string> f;
     std::stringstream s(line);
@@ -48,13 +51,18 @@ inline std::vector<PcErrorCase> pc_error_cases() {
     PcErrorCase c;
     for (std::size_t i = 0; i < header.size(); ++i) c.column[header[i]] = i < f.size() ? f[i] : "";
     c.name = c.column["case"];
-    std::stringstream a(c.column["args"]);
+    std::stringstream a(c.column.count("compare_args") ? c.column["compare_args"] : c.column["args"]);
     std::string word;
     while (a >> word) c.args.push_back(word);
     cases.push_back(std::move(c));
   }
   return cases;
 }
+
+inline std::vector<PcErrorCase> pc_error_cases() { return mpeg_cases("pc_error_reference.csv"); }
+
+/// mmetric's mesh cases (mm_pcc_reference.csv): sample --mode grid + compare --mode pcc.
+inline std::vector<PcErrorCase> mmetric_mesh_cases() { return mpeg_cases("mm_pcc_reference.csv"); }
 
 /// The value of pc_error option `key` ("-r", "-n", "--dropdups", ...), or nullopt.
 inline std::optional<std::string> pc_error_option(const PcErrorCase& c, const std::string& key) {
@@ -79,6 +87,31 @@ inline std::string qm3d_flags(const PcErrorCase& c) {
     flags += std::string(" --color-space ") + (*m == "0" ? "rgb" : *m == "8" ? "ycocg" : "ycbcr");
   }
   return flags;
+}
+
+/// An mmetric mesh case's options as `qm3d psnr` flags on the two meshes.
+inline std::string qm3d_mesh_flags(const PcErrorCase& c) {
+  std::string flags = " --grid-size " + c.column.at("gridSize");
+  if (const auto r = pc_error_option(c, "--resolution"); r && *r != "0") flags += " --peak " + *r;
+  if (const auto n = pc_error_option(c, "--normalCalcModificationEnable"); n && *n == "false") {
+    flags += " --d2-normals transferred";
+  }
+  if (const auto d = pc_error_option(c, "--dropDuplicates")) flags += " --drop-duplicates " + *d;
+  if (const auto p = pc_error_option(c, "--neighborsProc")) flags += " --neighbours " + *p;
+  return flags;
+}
+
+/// mmetric's statistics lines ("Mean=", one frame): the symmetric PSNRs clipped at 99.99.
+inline void expect_mmetric_statistics(const PcErrorCase& c, const nlohmann::json& features) {
+  for (const auto& [column, name] : std::vector<std::pair<std::string, std::string>>{
+           {"stat_d1_psnr", "d1_psnr"}, {"stat_d2_psnr", "d2_psnr"}, {"stat_c0_psnr", "c0_psnr"},
+           {"stat_c1_psnr", "c1_psnr"}, {"stat_c2_psnr", "c2_psnr"}}) {
+    SCOPED_TRACE(c.name + " " + column);
+    const double expected = std::stod(c.column.at(column));
+    const nlohmann::json& v = features.at(name);
+    const double ours = std::min(99.99, v.is_null() ? HUGE_VAL : v.get<double>());
+    EXPECT_NEAR(ours, expected, 1e-8 * expected);
+  }
 }
 
 /// The table's column suffixes and qm3d's value names, in the table's order.

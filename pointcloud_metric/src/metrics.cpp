@@ -16,7 +16,7 @@ void register_metrics(Registry& registry) {
   };
   registry.add(pcqm_spec());
   if (registry.has_sampler()) registry.add(pcqm_sampled_spec(registry.sampler()));
-  registry.add(psnr_spec());
+  registry.add(psnr_spec(registry.grid_sampler()));
   registry.add(dlab_spec(registry.colour_matcher()));
 }
 

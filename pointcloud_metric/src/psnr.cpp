@@ -66,8 +66,6 @@ const std::vector<std::string>& psnr_value_names() {
 
 namespace {
 
-/// pc_error's similarPointThreshold (D: computeQualityMetric's default argument).
-constexpr double kTieThreshold = 1e-8;
 /// Points per chunk of the sums (fixed: the sums do not depend on the thread count).
 constexpr std::size_t kChunk = 4096;
 
@@ -226,6 +224,7 @@ struct PassSettings {
   bool weighted = false;  // neighborsProc 2
   bool average_normals = true;
   bool keep_points = false;
+  double tie_threshold = kPcErrorTieThreshold;  // D: similarPointThreshold
 };
 
 struct PassSums {
@@ -264,10 +263,11 @@ PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, 
   std::uint32_t idx[kMaxNeighbours];
   double d2[kMaxNeighbours];
   const Point3f& q = a.points[i];
-  // Only the run of neighbours within kTieThreshold of each other matters (D1 uses the first):
-  // a 2-NN query settles most points, the full pc_error query the others.
+  // Only the run of neighbours within the tie threshold of each other matters (D1 uses the
+  // first): a 2-NN query settles most points, the full pc_error query the others.
   const bool run = p.colour || normals != nullptr;
-  const auto tied = [](double x, double y) { return std::fabs(y - x) < kTieThreshold; };
+  const double threshold = p.tie_threshold;
+  const auto tied = [threshold](double x, double y) { return std::fabs(y - x) < threshold; };
   const std::size_t found = run ? tree.tie_run_knn(q, 10, p.average_normals, tied, idx, d2)
                                 : tree.knn(q, 1, idx, d2);
   const std::uint32_t j = idx[0];
@@ -501,18 +501,105 @@ std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak, b
 
 }  // namespace
 
+namespace {
+
+/// How the loaded clouds are compared: pc_error's rules, or mmetric's compare --mode pcc.
+struct Conventions {
+  double tie_threshold = kPcErrorTieThreshold;
+  D2Normals d2_normals = D2Normals::kTransferred;
+};
+
+/// Everything after loading: trees, peak, B's normals, both passes, the result. `na` holds the
+/// normals of D2 (pc_error's cloudNormalsA: `a` itself, or a normals file's cloud); `peak` the
+/// peak when fixed (else pc_error's nearest-neighbour default). Adds to `result` and `details`.
+void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
+                    std::optional<double> peak_given, const PsnrOptions& options,
+                    const Conventions& conventions, const std::string& reference_name,
+                    ProgressSteps& progress, nlohmann::json& details, MetricResult& result) {
+  const Direction direction = options.direction.value_or(Direction::kSymmetric);
+  const bool own_normals = conventions.d2_normals == D2Normals::kOwn && !b.normals.empty();
+  const bool d2 = !na.normals.empty();
+
+  progress.begin("trees");
+  auto a_tree_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
+                                [&] { return std::make_unique<MpegTree>(a.points); });
+  const MpegTree b_tree(b.points);
+  const std::unique_ptr<MpegTree> a_tree_owned = a_tree_task.get();
+  const MpegTree& a_tree = *a_tree_owned;
+  const bool na_is_a = &na == &a || na.points == a.points;
+  const std::unique_ptr<MpegTree> na_tree =
+      d2 && !own_normals && !na_is_a ? std::make_unique<MpegTree>(na.points) : nullptr;
+
+  double peak = 0;
+  if (peak_given) {
+    peak = *peak_given;
+  } else {
+    const NnDistances nn = nn_distances(a, a_tree, options.threads);
+    if (nn.max <= DBL_MIN) {
+      throw NumericError("psnr: " + reference_name +
+                         ": no two distinct points, so no nearest-neighbour distance gives a "
+                         "peak; give --peak");
+    }
+    peak = nn.max;
+    details["nn_min"] = nn.min;
+    details["nn_max"] = nn.max;
+  }
+  details["peak"] = peak;
+  details["points_reference"] = a.size();
+  details["points_distorted"] = b.size();
+  details["duplicates_reference"] = a.duplicates;
+  details["duplicates_distorted"] = b.duplicates;
+  if (d2) details["d2_normals"] = own_normals ? "distorted's own" : "transferred from the reference";
+
+  progress.begin("normals");
+  std::vector<Point3f> b_normals;
+  if (d2 && !own_normals) {
+    b_normals = transfer_normals(na, na_tree ? *na_tree : a_tree, b, b_tree,
+                                 options.average_normals, options.threads);
+  }
+  const std::vector<Point3f>& b_d2_normals = own_normals ? b.normals : b_normals;
+
+  progress.begin("errors");
+  PassSettings p;
+  p.colour = options.colour;
+  p.space = options.colour_space;
+  p.weighted = options.tied == TiedNeighbours::kWeightedAverage;
+  p.average_normals = options.average_normals;
+  p.keep_points = options.per_element;
+  p.tie_threshold = conventions.tie_threshold;
+  std::optional<NamedValues> ab, ba;
+  if (direction != Direction::kDistToRef) {
+    const PassOutput o = run_pass(a, b, b_tree, d2 ? &b_d2_normals : nullptr, p, options.threads);
+    ab = pass_values(o, peak, d2, p, options.hausdorff);
+    result.ref_to_dist = direction_result(*ab, o, a, options.per_element, d2, options.colour);
+  }
+  if (direction != Direction::kRefToDist) {
+    const PassOutput o = run_pass(b, a, a_tree, d2 ? &na.normals : nullptr, p, options.threads);
+    ba = pass_values(o, peak, d2, p, options.hausdorff);
+    result.dist_to_ref = direction_result(*ba, o, b, options.per_element, d2, options.colour);
+  }
+  result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
+  result.score = *find_value(result.values, "d1_psnr");
+  result.text_note = text_note(result.values, options, peak, peak_given.has_value());
+}
+
+void check_peak(const std::optional<double>& peak) {
+  if (peak && !(*peak > 0 && *peak <= FLT_MAX)) {
+    throw std::invalid_argument("peak: must be a positive float32 number, got " +
+                                short_number(*peak));
+  }
+}
+
+}  // namespace
+
 MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals& reference_normals,
                           const ColoredCloud& distorted, const PsnrOptions& options,
                           const std::string& reference_name, const std::string& distorted_name) {
   const auto start = std::chrono::steady_clock::now();
   check_thread_count(options.threads);
-  if (options.peak && !(*options.peak > 0 && *options.peak <= FLT_MAX)) {
-    throw std::invalid_argument("peak: must be a positive float32 number, got " +
-                                short_number(*options.peak));
-  }
+  check_peak(options.peak);
   check_cloud(reference, reference_name, options.colour);
   check_cloud(distorted, distorted_name, options.colour);
-  const Direction direction = options.direction.value_or(Direction::kSymmetric);
   ProgressSteps progress(options.progress, 4);
   MetricResult result;
   result.metric = "psnr";
@@ -555,74 +642,169 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   }
   if (options.inputs_done) options.inputs_done();
   const MpegCloud& na = file_normals ? *file_normals : a;  // pc_error's cloudNormalsA
-  const bool d2 = !na.normals.empty();
-  if (!d2) {
+  if (na.normals.empty()) {
     result.warnings.push_back("psnr: " + reference_name +
                               " has no normals (nx, ny, nz): D2 is left out, as pc_error does "
                               "(give --normals FILE or --normals estimate)");
   }
-
-  progress.begin("trees");
-  auto a_tree_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
-                                [&] { return std::make_unique<MpegTree>(a.points); });
-  const MpegTree b_tree(b.points);
-  const std::unique_ptr<MpegTree> a_tree_owned = a_tree_task.get();
-  const MpegTree& a_tree = *a_tree_owned;
-  const std::unique_ptr<MpegTree> na_tree =
-      file_normals && file_normals->points != a.points ? std::make_unique<MpegTree>(na.points)
-                                                       : nullptr;
-
   nlohmann::json details = nlohmann::json::object();
-  double peak = 0;
-  if (options.peak) {
-    peak = static_cast<float>(*options.peak);  // pc_error's -r is a float
-  } else {
-    const NnDistances nn = nn_distances(a, a_tree, options.threads);
-    if (nn.max <= DBL_MIN) {
-      throw NumericError("psnr: " + reference_name +
-                         ": no two distinct points, so no nearest-neighbour distance gives a "
-                         "peak; give --peak");
-    }
-    peak = nn.max;
-    details["nn_min"] = nn.min;
-    details["nn_max"] = nn.max;
-  }
-  details["peak"] = peak;
-  details["peak_source"] = options.peak ? "given" : "largest nearest-neighbour distance in the reference";
-  details["points_reference"] = a.size();
-  details["points_distorted"] = b.size();
-  details["duplicates_reference"] = a.duplicates;
-  details["duplicates_distorted"] = b.duplicates;
-
-  progress.begin("normals");
-  std::vector<Point3f> b_normals;
-  if (d2) {
-    b_normals = transfer_normals(na, na_tree ? *na_tree : a_tree, b, b_tree,
-                                 options.average_normals, options.threads);
-  }
-
-  progress.begin("errors");
-  PassSettings p;
-  p.colour = options.colour;
-  p.space = options.colour_space;
-  p.weighted = weighted;
-  p.average_normals = options.average_normals;
-  p.keep_points = options.per_element;
-  std::optional<NamedValues> ab, ba;
-  if (direction != Direction::kDistToRef) {
-    const PassOutput o = run_pass(a, b, b_tree, d2 ? &b_normals : nullptr, p, options.threads);
-    ab = pass_values(o, peak, d2, p, options.hausdorff);
-    result.ref_to_dist = direction_result(*ab, o, a, options.per_element, d2, options.colour);
-  }
-  if (direction != Direction::kRefToDist) {
-    const PassOutput o = run_pass(b, a, a_tree, d2 ? &na.normals : nullptr, p, options.threads);
-    ba = pass_values(o, peak, d2, p, options.hausdorff);
-    result.dist_to_ref = direction_result(*ba, o, b, options.per_element, d2, options.colour);
-  }
-  result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
-  result.score = *find_value(result.values, "d1_psnr");
+  // pc_error's -r is a float.
+  const std::optional<double> peak =
+      options.peak ? std::optional<double>(static_cast<float>(*options.peak)) : std::nullopt;
+  details["peak_source"] =
+      options.peak ? "given" : "largest nearest-neighbour distance in the reference";
+  compare_loaded(a, b, na, peak, options, Conventions{}, reference_name, progress, details, result);
   result.details = std::move(details);
-  result.text_note = text_note(result.values, options, peak, options.peak.has_value());
+  result.provenance.version = kVersion;
+  result.provenance.seconds = seconds_since(start);
+  progress.finish();
+  return result;
+}
+
+namespace {
+
+/// Grid samples as the cloud loader takes them (float32 values exactly; colours u / 255).
+struct SampledCloud {
+  ColoredCloud cloud;
+  std::vector<Vec3> normals;
+};
+
+SampledCloud as_cloud(const GridSamples& s) {
+  SampledCloud out;
+  const std::size_t n = s.positions.size();
+  out.cloud.positions.resize(n);
+  out.normals.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      out.cloud.positions[i][k] = s.positions[i][k];
+      out.normals[i][k] = s.normals[i][k];
+    }
+  }
+  out.cloud.colors.resize(s.colours.size());
+  for (std::size_t i = 0; i < s.colours.size(); ++i) {
+    out.cloud.colors[i] = {s.colours[i][0] / 255.0, s.colours[i][1] / 255.0,
+                           s.colours[i][2] / 255.0};
+  }
+  return out;
+}
+
+/// mmetric's --resolution 0: glm::length(max - min) of the sampled cloud A's float box.
+double box_diagonal(const std::vector<Float3>& points) {
+  Float3 lo{FLT_MAX, FLT_MAX, FLT_MAX}, hi{-FLT_MAX, -FLT_MAX, -FLT_MAX};
+  for (const Float3& p : points) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::fmin(p[k], lo[k]);
+      hi[k] = std::fmax(p[k], hi[k]);
+    }
+  }
+  const float d0 = hi[0] - lo[0], d1 = hi[1] - lo[1], d2 = hi[2] - lo[2];
+  const float t0 = d0 * d0, t1 = d1 * d1, t2 = d2 * d2;
+  return std::sqrt(t0 + t1 + t2);
+}
+
+nlohmann::json box_json(const FloatBox& b) {
+  return {{"min", {b.min[0], b.min[1], b.min[2]}}, {"max", {b.max[0], b.max[1], b.max[2]}}};
+}
+
+nlohmann::json sampling_json(const GridSamples& s) {
+  return {{"samples", s.positions.size()},
+          {"duplicate_samples_dropped", s.duplicate_samples},
+          {"degenerate_faces_skipped", s.degenerate_faces}};
+}
+
+}  // namespace
+
+MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
+                               const GridSampler& sampler, const MeshPsnrOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  check_thread_count(options.threads);
+  check_peak(options.peak);
+  if (!sampler) throw std::logic_error("psnr: no grid sampler (the mesh module is not linked)");
+  if (options.estimate_normals) {
+    throw std::invalid_argument("normals: two meshes are compared on their samples' face "
+                                "normals; --normals does not apply to meshes");
+  }
+  for (const Input* in : {&reference, &distorted}) {
+    if (!in->is_mesh()) {
+      throw FormatError(in->name() + ": a point cloud; psnr compares two meshes (sampled on one "
+                        "grid) or two clouds, not a mesh with a cloud (sample the mesh first: "
+                        "qm3d sample --mode grid)");
+    }
+  }
+  ProgressSteps progress(options.progress, 5);
+  MetricResult result;
+  result.metric = "psnr";
+
+  progress.begin("sampling");
+  GridSamplingOptions g;
+  g.grid_size = options.grid_size;
+  g.box = options.box ? *options.box
+                      : union_box(vertex_box(reference.mesh().mesh.positions),
+                                  vertex_box(distorted.mesh().mesh.positions));
+  g.bilinear = options.bilinear;
+  g.threads = options.threads;
+  GridSamples sa = sampler(reference, g);
+  GridSamples sb = sampler(distorted, g);
+  for (const auto& [s, in] : {std::pair{&sa, &reference}, std::pair{&sb, &distorted}}) {
+    for (const std::string& w : s->warnings) result.warnings.push_back(in->name() + ": " + w);
+    if (s->positions.empty()) {
+      throw NumericError("psnr: " + in->name() + ": no grid samples (grid size " +
+                         std::to_string(options.grid_size) +
+                         " is too coarse for its faces, or every face has zero area)");
+    }
+    if (s->degenerate_faces > 0) {
+      result.warnings.push_back("psnr: " + in->name() + ": " +
+                                std::to_string(s->degenerate_faces) +
+                                " faces of zero area were not sampled (as mmetric)");
+    }
+  }
+  PsnrOptions o = options;
+  if (o.colour && (sa.colours.empty() || sb.colours.empty())) {
+    const std::string& name = sa.colours.empty() ? reference.name() : distorted.name();
+    result.warnings.push_back("psnr: " + name + " has no vertex colours: geometry values only "
+                              "(as mmetric)");
+    o.colour = false;
+  }
+  nlohmann::json details = nlohmann::json::object();
+  details["sampling"] = {{"method", "mmetric grid (mm sample --mode grid --useNormal)"},
+                         {"grid_size", options.grid_size},
+                         {"box", box_json(sa.box)},
+                         {"box_source", options.box ? "given" : "union of the two vertex boxes"},
+                         {"step", sa.step},
+                         {"reference", sampling_json(sa)},
+                         {"distorted", sampling_json(sb)}};
+  details["conventions"] = {{"tool", "mmetric 1.1.7 compare --mode pcc"},
+                            {"tie_threshold", kMmetricTieThreshold},
+                            {"duplicate_normals", "averaged (unnormalised)"}};
+  const std::optional<double> peak =
+      options.peak ? static_cast<float>(*options.peak)
+                   : static_cast<float>(box_diagonal(sa.positions));
+  details["peak_source"] =
+      options.peak ? "given" : "diagonal of the reference's sampled cloud's box (mmetric's "
+                               "--resolution 0)";
+  const int dups = static_cast<int>(o.duplicates);
+  const bool weighted = o.tied == TiedNeighbours::kWeightedAverage;
+
+  progress.begin("loading");
+  MpegCloud a, b;
+  {
+    const SampledCloud ca = as_cloud(sa);
+    sa = {};
+    a = detail::load_mpeg_cloud(ca.cloud.positions, o.colour ? &ca.cloud.colors : nullptr,
+                                ca.normals, dups, weighted, true);
+  }
+  {
+    const SampledCloud cb = as_cloud(sb);
+    sb = {};
+    b = detail::load_mpeg_cloud(cb.cloud.positions, o.colour ? &cb.cloud.colors : nullptr,
+                                cb.normals, dups, weighted, true);
+  }
+  if (options.inputs_done) options.inputs_done();
+  Conventions c;
+  c.tie_threshold = kMmetricTieThreshold;
+  c.d2_normals = options.d2_normals;
+  compare_loaded(a, b, a, peak, o, c, reference.name(), progress, details, result);
+  result.details = std::move(details);
   result.provenance.version = kVersion;
   result.provenance.seconds = seconds_since(start);
   progress.finish();
@@ -651,17 +833,22 @@ ReferenceNormals normals_file(const std::string& path) {
 
 }  // namespace
 
-MetricSpec psnr_spec() {
+MetricSpec psnr_spec(GridSampler grid_sampler) {
   MetricSpec s;
   s.name = "psnr";
   s.title = "PSNR";
-  s.reproduces = "MPEG pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric @ bd6df59)";
+  s.reproduces =
+      "MPEG pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric @ bd6df59); meshes: MPEG mmetric 1.1.7 "
+      "(MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
   s.summary =
       "MPEG pc_error's D1 (point-to-point) and D2 (point-to-plane) PSNR, Hausdorff and colour "
-      "PSNR between two point clouds (pc_error 0.14.2's values; score = symmetric D1 PSNR, dB)";
+      "PSNR between two point clouds (pc_error 0.14.2's values), or between two meshes sampled "
+      "on one grid as MPEG mmetric does (mm sample --mode grid + compare --mode pcc, the "
+      "V-DMC CTC); score = symmetric D1 PSNR, dB";
   s.higher_is_better = true;
-  s.applies_to = AppliesTo::kClouds;
+  s.applies_to = AppliesTo::kSameKind;
   s.reads = Input::Kind::kCloud;
+  s.reads_two_meshes_as_meshes = true;
   s.default_direction = Direction::kSymmetric;
   s.direction_help =
       "symmetric: both passes, each value the worse of the two (pc_error's \"Final\"); "
@@ -700,12 +887,26 @@ MetricSpec psnr_spec() {
        "points with normals (pc_error -n); estimate = computed as "
        "shared/tools/add_pca_normals.py does (k = 12, outward from the centroid)",
        ""},
+      {"grid_size",
+       "Two meshes: grid nodes along the longest side of the union of their vertex boxes, "
+       "both sampled on that grid (mm sample --mode grid --gridSize; the CTC's 1024)",
+       1024, {}, 2, 1000000},
+      {"d2_normals",
+       "Normals D2 projects on in the pass reference -> distorted: auto = own for two meshes "
+       "(the distorted mesh's sampled face normals, mmetric's default), transferred for clouds "
+       "(the reference's normals transferred to the distorted points, pc_error; mmetric "
+       "--normalCalcModificationEnable=false)",
+       "auto", {"auto", "own", "transferred"}},
+      {"bilinear",
+       "Two meshes: texture colours of a textured OBJ looked up bilinearly (mmetric --bilinear) "
+       "instead of at the nearest texel",
+       false},
       {"no_hausdorff", "Leave out the Hausdorff values (pc_error without -d 1)", false},
       {"no_color", "Geometry only: leave out the colour values (pc_error without -c 1)", false},
   };
-  s.run = [](const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
-             const OptionValues& v) {
-    PsnrOptions o;
+  s.run = [grid_sampler](const MetricSpec&, const Input& ref, const Input& dist,
+                         const RunOptions& run, const OptionValues& v) {
+    MeshPsnrOptions o;
     static_cast<RunOptions&>(o) = run;
     const double peak = v.at("peak").get<double>();
     if (peak > 0) o.peak = peak;
@@ -717,6 +918,21 @@ MetricSpec psnr_spec() {
     o.colour = !v.at("no_color").get<bool>();
     const std::string normals = v.at("normals").get<std::string>();
     o.estimate_normals = normals == "estimate";
+    const std::string d2_normals = v.at("d2_normals").get<std::string>();
+    if (ref.is_mesh() && dist.is_mesh()) {
+      if (!normals.empty()) {
+        throw std::invalid_argument("normals: two meshes are compared on their samples' face "
+                                    "normals; --normals applies to clouds");
+      }
+      o.grid_size = v.at("grid_size").get<int>();
+      o.d2_normals = d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn;
+      o.bilinear = v.at("bilinear").get<bool>();
+      return compute_mesh_psnr(ref, dist, grid_sampler, o);
+    }
+    if (d2_normals == "own") {
+      throw std::invalid_argument("d2_normals: own applies to two meshes; clouds are compared as "
+                                  "pc_error does (the reference's normals transferred)");
+    }
     const ReferenceNormals given = normals.empty() || o.estimate_normals
                                        ? ReferenceNormals{ref.cloud_normals(), {}, {}}
                                        : normals_file(normals);

@@ -64,7 +64,8 @@ std::vector<std::uint32_t> sorted_order(const std::vector<Point3f>& p) {
 }  // namespace
 
 MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colour_in,
-                          const std::vector<Vec3>& normals, int duplicates, bool weighted) {
+                          const std::vector<Vec3>& normals, int duplicates, bool weighted,
+                          bool average_normals) {
   const std::size_t n = positions.size();
   std::vector<Point3f> input(n);
   for (std::size_t i = 0; i < n; ++i) input[i] = to_float(positions[i]);
@@ -88,7 +89,18 @@ MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<
     for (std::size_t k = first; k < kept_end; ++k) {
       const std::uint32_t i = order[k];
       out.points.push_back(input[i]);
-      if (!normals.empty()) out.normals.push_back(to_float(normals[i]));
+      if (!normals.empty()) {
+        Point3f n = to_float(normals[i]);
+        if (average_normals && duplicates == 2 && run > 1) {
+          Point3f sum{0, 0, 0};
+          for (std::size_t m = first; m < last; ++m) {
+            const Point3f o = to_float(normals[order[m]]);
+            for (int c = 0; c < 3; ++c) sum[c] += o[c];
+          }
+          for (int c = 0; c < 3; ++c) n[c] = sum[c] / static_cast<float>(run);
+        }
+        out.normals.push_back(n);
+      }
       out.merged.push_back(duplicates == 2 && weighted ? static_cast<int>(run) : 1);
       if (!colours) continue;
       const Rgb& own = (*colour_in)[i];

@@ -42,10 +42,13 @@ struct MpegCloud {
 /// Loads a cloud the way pc_error does: positions rounded to float32, colours 0..1 -> 0..255,
 /// normals to float32; sorted; runs of equal positions averaged (`duplicates` 2: colour =
 /// truncated mean, `merged` = run length when `weighted`), dropped (1: the first of each run
-/// kept) or kept (0).
+/// kept) or kept (0). A merged run keeps its first normal (pc_error), or with
+/// `average_normals` their float sum (in sorted order) / count, unnormalised (mmetric's
+/// removeDuplicatePoints).
 /// `colours`: one per point, or nullptr (none); `normals`: one per point, or empty.
 MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colours,
-                          const std::vector<Vec3>& normals, int duplicates, bool weighted);
+                          const std::vector<Vec3>& normals, int duplicates, bool weighted,
+                          bool average_normals = false);
 
 /// pc_error's k-d tree over a cloud's points (nanoflann, float elements, double distances).
 class MpegTree {

@@ -14,8 +14,9 @@ MetricSpec pcqm_spec();
 /// `sample` (the mesh module's sampler); PCQM's options plus points, density, seed.
 MetricSpec pcqm_sampled_spec(SurfaceSampler sample);
 
-/// "psnr" (psnr.cpp): MPEG pc_error's D1/D2/colour values of two clouds (qm3d/pointcloud/psnr.h).
-MetricSpec psnr_spec();
+/// "psnr" (psnr.cpp): MPEG pc_error's D1/D2/colour values of two clouds, or mmetric's of two meshes
+/// sampled on one grid by `grid_sampler` (qm3d/pointcloud/psnr.h).
+MetricSpec psnr_spec(GridSampler grid_sampler = {});
 
 /// "dlab" (dlab.cpp): D_LAB, the mean LAB2000HL colour distance between each element and its
 /// correspondence on the other object; two meshes by `on_surfaces` (the mesh module's colour

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "qm3d/common/grid_samples.h"
+#include "qm3d/common/metric.h"
 #include "qm3d/common/result.h"
 #include "qm3d/common/types.h"
 
@@ -46,6 +48,13 @@ enum class DuplicatePoints {
 enum class TiedNeighbours {
   kAverage = 1,          ///< their mean colour (pc_error's default)
   kWeightedAverage = 2,  ///< their mean weighted by how many duplicates each one merged
+};
+
+/// The normals D2 projects on in the pass A -> B.
+enum class D2Normals {
+  kTransferred,  ///< A's normals transferred to B's points (pc_error; mmetric
+                 ///< --normalCalcModificationEnable=false)
+  kOwn,          ///< B's own normals (mmetric's default; a mesh's grid samples carry their face's)
 };
 
 /// The names of MetricResult::values and of each direction's values, in this order (the colour
@@ -101,5 +110,32 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
                           const ColoredCloud& distorted, const PsnrOptions& options = {},
                           const std::string& reference_name = "reference",
                           const std::string& distorted_name = "distorted");
+
+/// How two meshes are compared the V-Mesh / V-DMC CTC way, with MPEG mmetric 1.1.7
+/// (MPEGGroup/mpeg-pcc-mmetric @ 5faa660): both sampled on one grid (`mm sample --mode grid
+/// --useNormal`, mesh/grid_sampling.h), then the two clouds compared as `mm compare --mode pcc`
+/// does: pc_error's metric with a tie threshold of 1e-20 (pc_error: 1e-8), duplicate samples
+/// merged with their normals averaged (unnormalised), D2 on B's own sampled normals.
+struct MeshPsnrOptions : PsnrOptions {
+  /// Grid nodes along the box's longest side (mm sample --gridSize; the CTC's 1024).
+  int grid_size = 1024;
+  /// The grid's box; unset = the union of the two meshes' vertex boxes (the CTC's).
+  std::optional<FloatBox> box;
+  D2Normals d2_normals = D2Normals::kOwn;
+  bool bilinear = false;  ///< texture lookups of textured OBJ files bilinear (else nearest)
+};
+
+/// The tie threshold of mmetric's compare (its similarPointThreshold) and pc_error's.
+constexpr double kMmetricTieThreshold = 1e-20;
+constexpr double kPcErrorTieThreshold = 1e-8;
+
+/// mmetric's values of two meshes (MeshPsnrOptions). Unset peak = mmetric's --resolution 0: the
+/// diagonal of the reference's sampled cloud's box (float32). A mesh without vertex colours
+/// gives geometry values only (with a warning). Details: how the meshes were sampled (grid
+/// size, box, step, samples, duplicates, degenerate faces) and the conventions used.
+/// @throws FormatError   an input that is not a mesh, a normals option (meshes carry theirs)
+/// @throws NumericError  a grid that yields no samples, a non-finite box
+MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
+                               const GridSampler& sampler, const MeshPsnrOptions& options = {});
 
 }  // namespace qm3d::pointcloud
