@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 
 namespace qm3d::app {
@@ -29,6 +30,12 @@ struct SampleCommands {
   std::string input, output;
   SamplingCli sampling;
   bool vertices = false;
+  std::string mode = "random";        ///< random (area-uniform) or grid (mmetric's)
+  int grid_size = 1024;
+  std::vector<double> box;            ///< --box: 6 numbers, or empty (the mesh's own box)
+  bool normals = false;               ///< --normals: write nx, ny, nz
+  bool all_axes = false;
+  bool bilinear = false;
 };
 
 /// Registers `sample` and `texture-to-vertex`; `add_common` adds --threads, --quiet, ... The

@@ -691,7 +691,8 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
   }
   result.warnings.insert(result.warnings.begin(), reading.begin(), reading.end());
   result.provenance.version = kVersion;
-  result.provenance.reproduces = spec.reproduces;
+  // A metric that follows one of several tools by input kind names the one it followed.
+  if (result.provenance.reproduces.empty()) result.provenance.reproduces = spec.reproduces;
   result.provenance.reference = reference.name();
   result.provenance.distorted = distorted.name();
   result.provenance.seconds =

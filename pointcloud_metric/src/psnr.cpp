@@ -503,6 +503,9 @@ std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak, b
 
 namespace {
 
+constexpr const char* kPcErrorTool = "MPEG pc_error 0.14.2 (MPEGGroup/mpeg-pcc-dmetric @ bd6df59)";
+constexpr const char* kMmetricTool = "MPEG mmetric 1.1.7 (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
+
 /// How the loaded clouds are compared: pc_error's rules, or mmetric's compare --mode pcc.
 struct Conventions {
   double tie_threshold = kPcErrorTieThreshold;
@@ -655,6 +658,7 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
       options.peak ? "given" : "largest nearest-neighbour distance in the reference";
   compare_loaded(a, b, na, peak, options, Conventions{}, reference_name, progress, details, result);
   result.details = std::move(details);
+  result.provenance.reproduces = kPcErrorTool;
   result.provenance.version = kVersion;
   result.provenance.seconds = seconds_since(start);
   progress.finish();
@@ -805,6 +809,7 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   c.d2_normals = options.d2_normals;
   compare_loaded(a, b, a, peak, o, c, reference.name(), progress, details, result);
   result.details = std::move(details);
+  result.provenance.reproduces = kMmetricTool;
   result.provenance.version = kVersion;
   result.provenance.seconds = seconds_since(start);
   progress.finish();
@@ -919,6 +924,12 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
     const std::string normals = v.at("normals").get<std::string>();
     o.estimate_normals = normals == "estimate";
     const std::string d2_normals = v.at("d2_normals").get<std::string>();
+    if (ref.is_mesh() != dist.is_mesh()) {
+      const Input& mesh = ref.is_mesh() ? ref : dist;
+      throw FormatError("psnr: " + mesh.name() + " is a mesh and the other input a cloud; psnr "
+                        "compares two meshes (sampled on one grid) or two clouds: sample the "
+                        "mesh first (qm3d sample --mode grid)");
+    }
     if (ref.is_mesh() && dist.is_mesh()) {
       if (!normals.empty()) {
         throw std::invalid_argument("normals: two meshes are compared on their samples' face "
