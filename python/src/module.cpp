@@ -401,6 +401,47 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("mesh"), py::arg("points"), py::arg("density"), py::arg("seed"));
 
   m.def(
+      "sample_grid",
+      [](const Input& mesh, int grid_size, std::optional<std::vector<double>> box, bool all_axes,
+         bool bilinear) {
+        GridSamplingOptions o;
+        o.grid_size = grid_size;
+        o.all_axes = all_axes;
+        o.bilinear = bilinear;
+        if (box) {
+          if (box->size() != 6) throw std::invalid_argument("box: 6 numbers (min x y z, max x y z)");
+          FloatBox b;
+          for (int k = 0; k < 3; ++k) {
+            b.min[k] = static_cast<float>((*box)[k]);
+            b.max[k] = static_cast<float>((*box)[3 + k]);
+          }
+          o.box = b;
+        }
+        GridSamples g;
+        {
+          py::gil_scoped_release release;
+          g = registry().grid_sampler()(mesh, o);
+        }
+        std::vector<Vec3> p(g.positions.size()), n(g.normals.size());
+        for (std::size_t i = 0; i < p.size(); ++i) {
+          for (int k = 0; k < 3; ++k) {
+            p[i][k] = g.positions[i][k];
+            n[i][k] = g.normals[i][k];
+          }
+        }
+        std::vector<Rgb> c(g.colours.size());
+        for (std::size_t i = 0; i < c.size(); ++i) {
+          c[i] = {g.colours[i][0] / 255.0, g.colours[i][1] / 255.0, g.colours[i][2] / 255.0};
+        }
+        py::list warnings;
+        for (const std::string& w : g.warnings) warnings.append(w);
+        return py::make_tuple(rows_as_numpy(p), rows_as_numpy(n), rows_as_numpy(c), warnings,
+                              g.degenerate_faces, g.step);
+      },
+      py::arg("mesh"), py::arg("grid_size"), py::arg("box"), py::arg("all_axes"),
+      py::arg("bilinear"));
+
+  m.def(
       "evaluate",
       [](const std::vector<double>& scores, const std::vector<double>& mos,
          const std::vector<double>& ci95, std::size_t bootstrap, std::uint64_t seed) {
