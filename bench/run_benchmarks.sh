@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|all]      (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|all]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -19,6 +19,13 @@
 #            --nbThreads=2; targets: qm3d's wall <= 1/3 of pc_error's, peak RSS <= 1.5 x
 #            (reported, not enforced); qm3d's symmetric D1 PSNR must equal pc_error's
 #            "mseF,PSNR (p2point)" (1e-8 relative, inf = inf).
+#   psnr_mesh `psnr --threads 2` on two meshes (both sampled on mmetric's grid, G 1024, then
+#            compared with mmetric's conventions): the monkey pair of mm_pcc_monkey_g1024 (1.9M
+#            samples per mesh; every value checked against mm_pcc_reference.csv: the case the
+#            test suite leaves out) and blob7's pair. When QM3D_MMETRIC names an mm 1.1.7 binary
+#            (built outside this repository), mm samples both meshes on the same box and
+#            compares them (it compares on one thread) in the same loop, interleaved; target:
+#            qm3d's wall <= 1/4 of mm's, peak RSS <= mm's (reported, not enforced).
 #
 # Each case runs QM3D_BENCH_RUNS times (default 5) and reports the median and the spread
 # (min..max) of wall time, CPU time (user + system) and peak RSS, as /usr/bin/time measures them
@@ -27,7 +34,8 @@
 # Environment: QM3D_BIN (the tool; default build/apps/qm3d), QM3D_BENCH_DIR (inputs, generated
 # once with ../shared/tools/*.py, which need python3-numpy; default /tmp/qm3d-bench),
 # QM3D_BENCH_THREADS (threads of the main cases; default all cores), QM3D_BENCH_RUNS,
-# QM3D_PC_ERROR (psnr: the pc_error binary to compare with; unset = qm3d alone).
+# QM3D_PC_ERROR (psnr: the pc_error binary to compare with; unset = qm3d alone), QM3D_MMETRIC
+# (psnr_mesh: the mm binary; unset = qm3d alone).
 # The exit status is 1 when a score differs between runs or from its reference, a `threads` /
 # `batch` check fails, or psnr's D1 PSNR differs from pc_error's (speed and memory targets are
 # reported, not enforced).
@@ -287,6 +295,109 @@ EOF
       summary+=("FAIL: $label: D1 PSNR qm3d $d1, pc_error $(sort -u "$TMP/dp" | tr '\n' ' ')")
       STATUS=1
     fi
+  done
+  echo
+  for line in "${summary[@]}"; do echo "$line"; done
+fi
+
+if [ "$WHICH" = all ] || [ "$WHICH" = psnr_mesh ]; then
+  gen_mesh 7
+  MM="${QM3D_MMETRIC:-}"
+  [ -z "$MM" ] || [ -x "$MM" ] || { echo "QM3D_MMETRIC=$MM is not executable" >&2; exit 1; }
+  REFDATA="$ROOT/../shared/data/reference"
+  # ASCII PLY copies of blob7's OFF pair for mm, which reads no OFF (the same numbers).
+  for m in blob7_ref blob7_bothnoise; do
+    [ -f "$DATA/$m.ply" ] || $PY - "$DATA/$m.off" "$DATA/$m.ply" <<'EOF'
+import sys
+lines = [l.split() for l in open(sys.argv[1]) if l.strip() and not l.startswith('#')]
+assert lines[0][0].endswith('OFF'), sys.argv[1]
+nv, nf = int(lines[1][0]), int(lines[1][1])
+v, f = lines[2:2 + nv], lines[2 + nv:2 + nv + nf]
+with open(sys.argv[2], 'w') as out:
+    out.write('ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n'
+              'property uchar red\nproperty uchar green\nproperty uchar blue\nelement face %d\n'
+              'property list uchar int vertex_indices\nend_header\n' % (nv, nf))
+    for r in v:
+        rgb = [float(c) for c in r[3:6]]
+        scale = 255 if max(rgb) <= 1 else 1
+        out.write('%s %s %s %d %d %d\n' % (r[0], r[1], r[2], *(round(c * scale) for c in rgb)))
+    for r in f:
+        out.write(' '.join(r[:int(r[0]) + 1]) + '\n')
+EOF
+  done
+  box_of() {  # two meshes -> "minx miny minz|maxx maxy maxz" of qm3d's sampling box (9 digits)
+    "$QM3D" psnr "$1" "$2" --grid-size 64 --no-color --no-hausdorff --json -q 2>/dev/null |
+      $PY -c "import json,sys; b=json.load(sys.stdin)['sampling']['box']; print(' '.join('%.9g' % v for v in b['min']) + '|' + ' '.join('%.9g' % v for v in b['max']))"
+  }
+  mm_run() {  # ref dist box peak -> mm samples both on the box and compares them
+    local lo=${3%|*} hi=${3#*|}
+    "$MM" sample --mode grid --gridSize 1024 --useNormal --hideProgress --minPos "$lo" --maxPos "$hi" \
+      --inputModel "$1" --outputModel "$TMP/a.ply" > /dev/null &&
+    "$MM" sample --mode grid --gridSize 1024 --useNormal --hideProgress --minPos "$lo" --maxPos "$hi" \
+      --inputModel "$2" --outputModel "$TMP/b.ply" > /dev/null &&
+    "$MM" compare --mode pcc --inputModelA "$TMP/a.ply" --inputModelB "$TMP/b.ply" --hausdorff \
+      --resolution "$4"
+  }
+  export -f mm_run; export MM TMP
+  echo
+  echo "| case | tool | threads | wall | CPU | peak RSS | D1 PSNR (symmetric, dB) | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  summary=()
+  for c in "monkey2 / monkey_simplified, G 1024 (1.9M samples each)|137.829|$REFDATA/cmdm/monkey2.obj|$REFDATA/cmdm/monkey_simplified.obj" \
+           "blob7 ref / bothnoise, G 1024|0|$DATA/blob7_ref.ply|$DATA/blob7_bothnoise.ply"; do
+    IFS='|' read -r label peak ref dist <<<"$c"
+    box=$(box_of "$ref" "$dist")
+    peak_flag=(); [ "$peak" = 0 ] || peak_flag=(--peak "$peak")
+    for f in tq tm dq dm; do : > "$TMP/$f"; done
+    # qm3d and mm alternate, so that a slow spell of the machine weighs on both alike.
+    for _ in $(seq "$RUNS"); do
+      measure_once "$TMP/tq" "$QM3D" psnr "$ref" "$dist" --grid-size 1024 "${peak_flag[@]}" --threads 2 --quiet --json
+      cp "$TMP/out" "$TMP/qm3d.json"
+      $PY -c "import json,sys; v=json.load(open(sys.argv[1]))['features']['d1_psnr']; print('inf' if v is None else repr(v))" "$TMP/out" >> "$TMP/dq" 2>/dev/null || echo error >> "$TMP/dq"
+      if [ -n "$MM" ]; then
+        measure_once "$TMP/tm" bash -c 'mm_run "$@"' _ "$ref" "$dist" "$box" "$peak"
+        awk '/mseF,PSNR \(p2point\):/ {v = $NF} END {print v == "" ? "error" : v}' "$TMP/out" >> "$TMP/dm"
+      fi
+    done
+    d1=$(head -1 "$TMP/dq")
+    if [ "$(sort -u "$TMP/dq" | wc -l)" != 1 ] || [ "$d1" = error ]; then
+      echo "FAIL: $label: qm3d's D1 PSNR differs between runs or is missing" >&2
+      STATUS=1
+    fi
+    target="wall <= 1/4 x mm's, peak RSS <= mm's"
+    [ -n "$MM" ] || target="(QM3D_MMETRIC unset: no mm to compare)"
+    printf '| %s | qm3d | 2 | %s s | %s s | %s MB | %s | %s |\n' "$label" "$(stats "$TMP/tq" 0)" \
+      "$(stats "$TMP/tq" 1)" "$(stats "$TMP/tq" 2 1024)" "$d1" "$target"
+    if [ "$peak" != 0 ]; then  # the table's G 1024 case, which the suite leaves out: every value
+      if $PY - "$TMP/qm3d.json" "$REFDATA/mpeg/mm_pcc_reference.csv" <<'EOF'
+import csv, json, math, sys
+j = json.load(open(sys.argv[1]))
+row = [r for r in csv.DictReader(open(sys.argv[2]), delimiter=';') if r['case'] == 'mm_pcc_monkey_g1024'][0]
+bad = []
+for prefix, feats in (('AB_', j['directions']['ref_to_dist']['features']),
+                      ('BA_', j['directions']['dist_to_ref']['features']), ('sym_', j['features'])):
+    for col, printed in row.items():
+        if not col.startswith(prefix) or printed == '':
+            continue
+        name = col[len(prefix):].replace('haus', 'hausdorff')
+        v = feats.get(name)
+        v = math.inf if v is None else v
+        e = math.inf if printed == 'inf' else float(printed)
+        if not (v == e or abs(v - e) <= 1e-8 * abs(e)):
+            bad.append('%s%s %r vs %s' % (prefix, name, v, printed))
+if bad:
+    print('; '.join(bad), file=sys.stderr)
+sys.exit(1 if bad else 0)
+EOF
+      then summary+=("ok: $label: every value of mm_pcc_monkey_g1024 within 1e-8")
+      else summary+=("FAIL: $label: values differ from mm_pcc_monkey_g1024"); STATUS=1
+      fi
+    fi
+    [ -n "$MM" ] || continue
+    printf '| %s | mm (sample x 2 + compare) | 1 | %s s | %s s | %s MB | %s | |\n' "$label" \
+      "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$(head -1 "$TMP/dm")"
+    wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
+    summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 0.25)")
   done
   echo
   for line in "${summary[@]}"; do echo "$line"; done
