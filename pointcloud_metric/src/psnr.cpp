@@ -851,7 +851,7 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
       "on one grid as MPEG mmetric does (mm sample --mode grid + compare --mode pcc, the "
       "V-DMC CTC); score = symmetric D1 PSNR, dB";
   s.higher_is_better = true;
-  s.applies_to = AppliesTo::kSameKind;
+  s.applies_to = AppliesTo::kClouds;  // compare/batch: clouds; `qm3d psnr` also takes two meshes
   s.reads = Input::Kind::kCloud;
   s.reads_two_meshes_as_meshes = true;
   s.default_direction = Direction::kSymmetric;
