@@ -374,7 +374,6 @@ bool MetricSpec::applies(const Input& reference, const Input& distorted) const {
     case AppliesTo::kMeshes: return reference.is_mesh() && distorted.is_mesh();
     case AppliesTo::kClouds: return !reference.is_mesh() && !distorted.is_mesh();
     case AppliesTo::kBoth: return true;
-    case AppliesTo::kSameKind: return reference.is_mesh() == distorted.is_mesh();
   }
   return false;
 }

@@ -851,7 +851,8 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
       "on one grid as MPEG mmetric does (mm sample --mode grid + compare --mode pcc, the "
       "V-DMC CTC); score = symmetric D1 PSNR, dB";
   s.higher_is_better = true;
-  s.applies_to = AppliesTo::kClouds;  // compare/batch: clouds; `qm3d psnr` also takes two meshes
+  // What compare and batch run it on; `qm3d psnr` itself also takes two meshes (the run below).
+  s.applies_to = AppliesTo::kClouds;
   s.reads = Input::Kind::kCloud;
   s.reads_two_meshes_as_meshes = true;
   s.default_direction = Direction::kSymmetric;

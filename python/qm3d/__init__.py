@@ -254,7 +254,7 @@ _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "
 
 def metrics():
     """Every metric qm3d has, as dicts: name, title, summary, applies_to ("meshes", "clouds",
-    "both", "same_kind": two meshes or two clouds), reads ("mesh" or "cloud"), default_direction, takes_model, higher_is_better (True
+    "both"), reads ("mesh" or "cloud"), default_direction, takes_model, higher_is_better (True
     when the score is a quality, like PSNR; False for a distortion, 0 = identical), value_names
     (the named values of ``MetricResult.values``), quality_value_names (those of them that are
     qualities) and options (each with name, help, default, choices, min, max)."""

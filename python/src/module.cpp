@@ -170,7 +170,6 @@ py::dict spec_dict(const MetricSpec& s) {
   d["summary"] = s.summary;
   d["applies_to"] = s.applies_to == AppliesTo::kMeshes   ? "meshes"
                     : s.applies_to == AppliesTo::kClouds ? "clouds"
-                    : s.applies_to == AppliesTo::kSameKind ? "same_kind"
                                                          : "both";
   d["reads"] = s.reads == Input::Kind::kMesh ? "mesh" : "cloud";
   d["reads_two_meshes_as_meshes"] = s.reads_two_meshes_as_meshes;

@@ -100,6 +100,9 @@ TEST(MeshPsnr, AMeshAgainstACloudIsNotScored) {
   EXPECT_FALSE(psnr.applies(mesh, mesh));  // not run by compare (G 1024 is seconds); psnr takes it
   EXPECT_TRUE(psnr.applies(cloud, cloud));
   EXPECT_EQ(psnr.reads_for(mesh, mesh), Input::Kind::kMesh);
+  // Run explicitly, a mesh with a cloud is refused (not scored as the mesh's vertices).
+  EXPECT_THROW(mesh_psnr(mesh, cloud, OptionValues::object()), FormatError);
+  EXPECT_THROW(mesh_psnr(cloud, mesh, OptionValues::object()), FormatError);
 }
 
 TEST(MeshPsnr, MeshOptionsAreCheckedWhereTheyDoNotApply) {

@@ -157,9 +157,8 @@ struct OptionSpec {
   bool min_exclusive = false;  ///< min itself is not allowed (e.g. a radius > 0)
 };
 
-/// Which inputs a metric scores: two meshes, two clouds, any pair (a mesh taken as its
-/// vertices where the metric reads clouds), or two of the same kind (not a mesh with a cloud).
-enum class AppliesTo { kMeshes, kClouds, kBoth, kSameKind };
+/// Which inputs a metric scores.
+enum class AppliesTo { kMeshes, kClouds, kBoth };
 
 /// The option values of one metric run: a JSON object {name: value}; missing names take their
 /// defaults.
