@@ -69,14 +69,6 @@ int run_grid_sample(const SampleCommands& c) {
   if (!input.is_mesh()) throw FormatError(c.input + ": a point cloud, not a mesh (no faces to sample)");
   const GridSamples s = registry().grid_sampler()(input, o);
   for (const std::string& w : s.warnings) warn(c.input + ": " + w);
-  if (s.positions.empty()) {
-    throw NumericError(c.input + ": no grid samples (grid size " + std::to_string(c.grid_size) +
-                       " is too coarse for its faces, or every face has zero area)");
-  }
-  if (s.degenerate_faces > 0) {
-    warn(c.input + ": " + std::to_string(s.degenerate_faces) +
-         " faces of zero area were not sampled (as mmetric)");
-  }
   if (s.colours.empty()) warn(c.input + ": no vertex colours: the cloud has none");
   ply::WriteData data;
   data.positions.resize(s.positions.size());

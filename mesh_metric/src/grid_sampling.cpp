@@ -287,6 +287,15 @@ GridSamples sample(const ColoredMesh& mesh, const Colouring& colouring,
     }
   }
 
+  if (total == 0) {
+    throw NumericError("grid sampling: no samples (grid size " + std::to_string(o.grid_size) +
+                       " is too coarse for its faces, or every face has zero area)");
+  }
+  if (out.degenerate_faces > 0) {
+    out.warnings.push_back(std::to_string(out.degenerate_faces) +
+                           " faces of zero area were not sampled (as mmetric)");
+  }
+
   // B: pushVertex drops a sample equal to one already kept.
   const auto hash = [](const Sample* s) { return hash_of(*s); };
   const auto eq = [](const Sample* a, const Sample* b) { return same(*a, *b); };

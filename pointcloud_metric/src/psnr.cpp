@@ -751,16 +751,6 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   GridSamples sb = sampler(distorted, g);
   for (const auto& [s, in] : {std::pair{&sa, &reference}, std::pair{&sb, &distorted}}) {
     for (const std::string& w : s->warnings) result.warnings.push_back(in->name() + ": " + w);
-    if (s->positions.empty()) {
-      throw NumericError("psnr: " + in->name() + ": no grid samples (grid size " +
-                         std::to_string(options.grid_size) +
-                         " is too coarse for its faces, or every face has zero area)");
-    }
-    if (s->degenerate_faces > 0) {
-      result.warnings.push_back("psnr: " + in->name() + ": " +
-                                std::to_string(s->degenerate_faces) +
-                                " faces of zero area were not sampled (as mmetric)");
-    }
   }
   PsnrOptions o = options;
   if (o.colour && (sa.colours.empty() || sb.colours.empty())) {

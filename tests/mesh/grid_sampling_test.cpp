@@ -165,6 +165,16 @@ TEST(GridSampling, ZeroAreaFacesAreSkippedAndCounted) {
   const GridSamples s = sample_grid(m, o);
   EXPECT_EQ(s.degenerate_faces, 2u);
   EXPECT_EQ(s.positions.size(), 6u);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "2 faces of zero area were not sampled (as mmetric)");
+}
+
+TEST(GridSampling, AGridWithoutSamplesIsAnError) {
+  ColoredMesh m = unit_triangle();
+  m.triangles = {{0, 1, 1}};  // nothing to sample
+  GridSamplingOptions o;
+  o.grid_size = 3;
+  EXPECT_THROW(sample_grid(m, o), NumericError);
 }
 
 TEST(GridSampling, AMeshWithoutColoursHasNone) {

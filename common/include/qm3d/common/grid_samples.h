@@ -51,7 +51,8 @@ struct GridSamples {
   float step = 0;      ///< the grid step
   std::size_t degenerate_faces = 0;    ///< faces skipped (area below DBL_EPSILON)
   std::size_t duplicate_samples = 0;   ///< samples dropped as equal to an earlier one
-  std::vector<std::string> warnings;   ///< e.g. mesh vertices outside the given box
+  /// Faces skipped, mesh vertices outside the given box.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace qm3d
