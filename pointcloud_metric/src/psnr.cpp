@@ -780,19 +780,15 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   const bool weighted = o.tied == TiedNeighbours::kWeightedAverage;
 
   progress.begin("loading");
-  MpegCloud a, b;
-  {
-    const SampledCloud ca = as_cloud(sa);
-    sa = {};
-    a = detail::load_mpeg_cloud(ca.cloud.positions, o.colour ? &ca.cloud.colors : nullptr,
-                                ca.normals, dups, weighted, true);
-  }
-  {
-    const SampledCloud cb = as_cloud(sb);
-    sb = {};
-    b = detail::load_mpeg_cloud(cb.cloud.positions, o.colour ? &cb.cloud.colors : nullptr,
-                                cb.normals, dups, weighted, true);
-  }
+  // mmetric's convertModel + removeDuplicatePoints; the samples are freed as each is loaded.
+  const auto load = [&](GridSamples& samples) {
+    const SampledCloud c = as_cloud(samples);
+    samples = {};
+    return detail::load_mpeg_cloud(c.cloud.positions, o.colour ? &c.cloud.colors : nullptr,
+                                   c.normals, dups, weighted, true);
+  };
+  const MpegCloud a = load(sa);
+  const MpegCloud b = load(sb);
   if (options.inputs_done) options.inputs_done();
   Conventions c;
   c.tie_threshold = kMmetricTieThreshold;
