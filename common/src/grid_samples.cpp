@@ -6,9 +6,12 @@
 
 namespace qm3d {
 
-FloatBox vertex_box(const std::vector<Vec3>& positions) {
+namespace {
+
+template <typename Point>
+FloatBox box_of(const std::vector<Point>& positions) {
   FloatBox b{{FLT_MAX, FLT_MAX, FLT_MAX}, {-FLT_MAX, -FLT_MAX, -FLT_MAX}};
-  for (const Vec3& p : positions) {
+  for (const Point& p : positions) {
     for (int k = 0; k < 3; ++k) {
       const float f = static_cast<float>(p[k]);
       b.min[k] = std::fmin(f, b.min[k]);
@@ -17,6 +20,11 @@ FloatBox vertex_box(const std::vector<Vec3>& positions) {
   }
   return b;
 }
+
+}  // namespace
+
+FloatBox vertex_box(const std::vector<Vec3>& positions) { return box_of(positions); }
+FloatBox vertex_box(const std::vector<Float3>& positions) { return box_of(positions); }
 
 FloatBox union_box(const FloatBox& a, const FloatBox& b) {
   FloatBox u;

@@ -694,14 +694,8 @@ SampledCloud as_cloud(const GridSamples& s) {
 
 /// mmetric's --resolution 0: glm::length(max - min) of the sampled cloud A's float box.
 double box_diagonal(const std::vector<Float3>& points) {
-  Float3 lo{FLT_MAX, FLT_MAX, FLT_MAX}, hi{-FLT_MAX, -FLT_MAX, -FLT_MAX};
-  for (const Float3& p : points) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::fmin(p[k], lo[k]);
-      hi[k] = std::fmax(p[k], hi[k]);
-    }
-  }
-  const float d0 = hi[0] - lo[0], d1 = hi[1] - lo[1], d2 = hi[2] - lo[2];
+  const FloatBox b = vertex_box(points);
+  const float d0 = b.max[0] - b.min[0], d1 = b.max[1] - b.min[1], d2 = b.max[2] - b.min[2];
   const float t0 = d0 * d0, t1 = d1 * d1, t2 = d2 * d2;
   return std::sqrt(t0 + t1 + t2);
 }

@@ -64,15 +64,20 @@ def expect(case, column, got):
         assert abs(got - expected) <= 1e-8 * abs(expected), f"{where}: {got!r}"
 
 
-@pytest.mark.parametrize("case", cases(), ids=lambda c: c["case"])
-def test_every_pc_error_case(case):
-    r = qm3d.psnr(os.path.join(SHARED, case["a"]), os.path.join(SHARED, case["b"]),
-                  **options(case))
+def expect_values(case, r):
+    """Every AB_/BA_/sym_ value of a table row in a psnr result."""
     for column in COLUMNS:
         name = column.replace("haus", "hausdorff")
         expect(case, "AB_" + column, r.ref_to_dist.features.get(name))
         expect(case, "BA_" + column, r.dist_to_ref.features.get(name))
         expect(case, "sym_" + column, r.features.get(name))
+
+
+@pytest.mark.parametrize("case", cases(), ids=lambda c: c["case"])
+def test_every_pc_error_case(case):
+    r = qm3d.psnr(os.path.join(SHARED, case["a"]), os.path.join(SHARED, case["b"]),
+                  **options(case))
+    expect_values(case, r)
     assert r.details["peak"] == pytest.approx(float(case["peak"]), rel=1e-8)
     assert r.details["points_reference"] == int(case["nA"])
     assert r.details["points_distorted"] == int(case["nB"])

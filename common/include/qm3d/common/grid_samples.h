@@ -25,6 +25,7 @@ struct FloatBox {
 /// The float32 box of a mesh's vertices (mmetric's Geometry::computeBBox: fmin / fmax of the
 /// float32 coordinates).
 FloatBox vertex_box(const std::vector<Vec3>& positions);
+FloatBox vertex_box(const std::vector<Float3>& positions);
 /// The union of two boxes (the CTC's shared box of a pair).
 FloatBox union_box(const FloatBox& a, const FloatBox& b);
 
