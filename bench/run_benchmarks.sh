@@ -143,7 +143,7 @@ check() {  # condition message: reports and records a failed check
   if $PY -c "import sys; sys.exit(0 if ($1) else 1)"; then echo "ok: $2"; else echo "FAIL: $2"; STATUS=1; fi
 }
 
-echo "qm3d $("$QM3D" --version | awk '{print $2}'), $THREADS threads, $(nproc) cores, $(uname -m)," \
+echo "qm3d $("$QM3D" --version | awk 'NR == 1 {print $2}'), $THREADS threads, $(nproc) cores, $(uname -m)," \
   "$(awk -F: '/model name/ {print $2; exit}' /proc/cpuinfo | sed 's/^ *//'), $RUNS run(s) per case" \
   "(median (min..max))"
 echo
