@@ -48,13 +48,15 @@ struct GlobalOptions {
 
 // Accepted before the command and by every command (so each --help lists them).
 void add_global_options(CLI::App* cmd, GlobalOptions& g) {
+  // Found once: every command's --help names it, and finding it stats the installation.
+  static const std::string default_data_dir = resolve_data_dir("").string();
   cmd->add_option("--threads", g.threads, "Threads to use (0 = all cores)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", g.quiet, "No warnings or progress on stderr");
   cmd->add_option("--data-dir", g.data_dir,
                   "Directory of the LAB2000HL tables (default: $QM3D_DATA_DIR, else " +
-                      resolve_data_dir("").string() + ")")
+                      default_data_dir + ")")
       ->type_name("DIR");
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|all]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -26,6 +26,21 @@
 #            (built outside this repository), mm samples both meshes on the same box and
 #            compares them (it compares on one thread) in the same loop, interleaved; target:
 #            qm3d's wall <= 1/4 of mm's, peak RSS <= mm's (reported, not enforced).
+#   vs-reference
+#            qm3d side by side with the reference implementations, built outside this repository
+#            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
+#            and QM3D_PCQM_REF (MEPP-team/PCQM's PCQM: PCQM 1M); a case whose reference is not
+#            named is left out, and one of the two must be. Each run of qm3d is followed by one of
+#            its reference (interleaved). qm3d runs with --threads 2; MEPP2 as it ships (single
+#            thread); PCQM with OMP_NUM_THREADS=2. The references run in a scratch directory
+#            holding the LAB2000HL tables PCQM opens from its working directory ($QM3D_DATA_DIR,
+#            else ../shared/data/lab2000hl) and taking the files they write there
+#            (cmdm.output.obj, features_extracted.csv). Printed: both tools' wall, CPU and peak
+#            RSS, the speed-up (reference wall / qm3d wall; targets >= 15 x, qm3d's peak RSS
+#            <= 400 MB on blob8 and <= 250 MB on PCQM 1M: reported, not enforced) and the score
+#            check: qm3d's score must round to what the reference prints ("Calculated CMDM = ",
+#            "PCQM value is : ", 6 significant digits), and each tool's score must be the same on
+#            every run. Not part of `all`.
 #
 # Each case runs QM3D_BENCH_RUNS times (default 5) and reports the median and the spread
 # (min..max) of wall time, CPU time (user + system) and peak RSS, as /usr/bin/time measures them
@@ -35,10 +50,10 @@
 # once with ../shared/tools/*.py, which need python3-numpy; default /tmp/qm3d-bench),
 # QM3D_BENCH_THREADS (threads of the main cases; default all cores), QM3D_BENCH_RUNS,
 # QM3D_PC_ERROR (psnr: the pc_error binary to compare with; unset = qm3d alone), QM3D_MMETRIC
-# (psnr_mesh: the mm binary; unset = qm3d alone).
+# (psnr_mesh: the mm binary; unset = qm3d alone), QM3D_MEPP2_CMDM and QM3D_PCQM_REF (vs-reference).
 # The exit status is 1 when a score differs between runs or from its reference, a `threads` /
-# `batch` check fails, or psnr's D1 PSNR differs from pc_error's (speed and memory targets are
-# reported, not enforced).
+# `batch` check fails, psnr's D1 PSNR differs from pc_error's, or vs-reference's score check
+# fails (speed and memory targets are reported, not enforced).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -135,7 +150,7 @@ check() {  # condition message: reports and records a failed check
   if $PY -c "import sys; sys.exit(0 if ($1) else 1)"; then echo "ok: $2"; else echo "FAIL: $2"; STATUS=1; fi
 }
 
-echo "qm3d $("$QM3D" --version | awk '{print $2}'), $THREADS threads, $(nproc) cores, $(uname -m)," \
+echo "qm3d $("$QM3D" --version | awk 'NR == 1 {print $2}'), $THREADS threads, $(nproc) cores, $(uname -m)," \
   "$(awk -F: '/model name/ {print $2; exit}' /proc/cpuinfo | sed 's/^ *//'), $RUNS run(s) per case" \
   "(median (min..max))"
 echo
@@ -398,6 +413,94 @@ EOF
       "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$(head -1 "$TMP/dm")"
     wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
     summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 0.25)")
+  done
+  echo
+  for line in "${summary[@]}"; do echo "$line"; done
+fi
+
+if [ "$WHICH" = vs-reference ]; then
+  MEPP2="${QM3D_MEPP2_CMDM:-}" PCQM_REF="${QM3D_PCQM_REF:-}"
+  [ -n "$MEPP2$PCQM_REF" ] || {
+    echo "vs-reference needs QM3D_MEPP2_CMDM (MEPP2's example_cmdm) and/or QM3D_PCQM_REF (MEPP-team/PCQM's binary)" >&2
+    exit 1
+  }
+  for b in "$MEPP2" "$PCQM_REF"; do
+    [ -z "$b" ] || [ -x "$b" ] || { echo "$b is not executable" >&2; exit 1; }
+  done
+  # The references read their tables and write their side files in the working directory.
+  scratch="$TMP/reference-cwd"
+  mkdir -p "$scratch"
+  if [ -n "$PCQM_REF" ]; then
+    tables="${QM3D_DATA_DIR:-$ROOT/../shared/data/lab2000hl}"
+    for f in L_data.txt RegularGrid_0_0_1.txt RegularGrid_0_0_2.txt RegularGridInit_0_0_1.txt \
+             RegularGridInit_0_0_2.txt; do
+      # PCQM runs on with an all-zero lightness table when L_data.txt is missing.
+      [ -s "$tables/$f" ] || { echo "$tables/$f is missing (set QM3D_DATA_DIR)" >&2; exit 1; }
+      ln -sf "$(cd "$tables" && pwd)/$f" "$scratch/$f"
+    done
+  fi
+  printed_score() {  # pattern stdout-file -> the last number printed after the pattern
+    awk -v p="$1" 'index($0, p) {v = $NF} END {print v == "" ? "error" : v}' "$2"
+  }
+  rounds_to() {  # qm3d printed -> exit 0 when qm3d's score rounds to the 6 significant digits printed
+    $PY -c "
+import math, sys
+q, p = (float(x) for x in sys.argv[1:])
+half = 0.5 * 10 ** (math.floor(math.log10(abs(p))) - 5) if p != 0 else 1e-300
+sys.exit(0 if abs(q - p) <= half * (1 + 1e-9) else 1)" "$1" "$2" 2>/dev/null
+  }
+  "$QM3D" --version | head -1
+  [ -z "$MEPP2" ] || echo "reference CMDM: $MEPP2 ($("$QM3D" --version | awk '$1 == "cmdm:"' | sed 's/^ *cmdm: //'))"
+  [ -z "$PCQM_REF" ] || echo "reference PCQM: $PCQM_REF ($("$QM3D" --version | awk '$1 == "pcqm:"' | sed 's/^ *pcqm: //'))"
+  echo
+  echo "| case | tool | threads | wall | CPU | peak RSS | score | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  cases=()
+  [ -z "$MEPP2" ] || cases+=(
+    "CMDM blob7 (164k vertices)|cmdm|blob7_ref.off|blob7_bothnoise.off|MEPP2 example_cmdm|>= 15 x MEPP2's speed|0"
+    "CMDM blob8 (655k vertices)|cmdm|blob8_ref.off|blob8_bothnoise.off|MEPP2 example_cmdm|>= 15 x MEPP2's speed, <= 400 MB|400")
+  [ -z "$PCQM_REF" ] || cases+=(
+    "PCQM sphere 1M points|pcqm|sphere_1000k_ref_bin.ply|sphere_1000k_cnoise10_bin.ply|MEPP-team/PCQM|>= 15 x the reference's speed, <= 250 MB|250")
+  summary=()
+  for c in "${cases[@]}"; do
+    IFS='|' read -r label metric ref dist tool target rss_mb <<<"$c"
+    if [ "$metric" = cmdm ]; then
+      gen_mesh "${ref:4:1}"
+      ref_cmd=(env -C "$scratch" "$MEPP2" "$DATA/$ref" "$DATA/$dist") ref_threads=1
+      pattern="Calculated CMDM = "
+    else
+      gen_cloud 1000000 1000k
+      ref_cmd=(env -C "$scratch" OMP_NUM_THREADS=2 "$PCQM_REF" "$DATA/$ref" "$DATA/$dist" -fq) ref_threads=2
+      pattern="PCQM value is : "
+    fi
+    for f in tq tr sq sr; do : > "$TMP/$f"; done
+    # qm3d and its reference alternate, so that a slow spell of the machine weighs on both alike.
+    for _ in $(seq "$RUNS"); do
+      SCORES="$TMP/sq" measure_once "$TMP/tq" "$QM3D" --threads 2 --quiet "$metric" \
+        "$DATA/$ref" "$DATA/$dist" --csv
+      measure_once "$TMP/tr" "${ref_cmd[@]}"
+      printed_score "$pattern" "$TMP/out" >> "$TMP/sr"
+    done
+    sq=$(head -1 "$TMP/sq") sr=$(head -1 "$TMP/sr")
+    printf '| %s | qm3d | 2 | %s s | %s s | %s MB | %s | %s |\n' "$label" "$(stats "$TMP/tq" 0)" \
+      "$(stats "$TMP/tq" 1)" "$(stats "$TMP/tq" 2 1024)" "$sq" "$target"
+    printf '| %s | %s | %s | %s s | %s s | %s MB | %s | |\n' "$label" "$tool" "$ref_threads" \
+      "$(stats "$TMP/tr" 0)" "$(stats "$TMP/tr" 1)" "$(stats "$TMP/tr" 2 1024)" "$sr"
+    wq=$(median "$TMP/tq" 0) wr=$(median "$TMP/tr" 0) mq=$(median "$TMP/tq" 2)
+    speedup=$($PY -c "print('%.1f' % ($wr / max($wq, 0.01)))")
+    met() { $PY -c "print('met' if $1 else 'missed')"; }
+    line="$label: $tool / qm3d wall $wr / $wq s = $speedup x (target >= 15: $(met "$speedup >= 15"))"
+    [ "$rss_mb" = 0 ] || line+=", qm3d peak RSS $((${mq%.*} / 1024)) MB (target <= $rss_mb MB: $(met "${mq%.*} <= $rss_mb * 1024"))"
+    summary+=("$line")
+    if [ "$(sort -u "$TMP/sq" | wc -l)" != 1 ] || [ "$(sort -u "$TMP/sr" | wc -l)" != 1 ]; then
+      summary+=("FAIL: $label: a score differs between runs: qm3d $(sort -u "$TMP/sq" | tr '\n' ' '), $tool $(sort -u "$TMP/sr" | tr '\n' ' ')")
+      STATUS=1
+    elif [ "$sr" != error ] && rounds_to "$sq" "$sr"; then
+      summary+=("ok: $label: qm3d's score $sq rounds to $tool's printed $sr")
+    else
+      summary+=("FAIL: $label: qm3d's score $sq, $tool printed $sr")
+      STATUS=1
+    fi
   done
   echo
   for line in "${summary[@]}"; do echo "$line"; done

@@ -58,14 +58,14 @@ set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 if(QM3D_PACKAGE_HOMEPAGE)
   set(CPACK_DEBIAN_PACKAGE_HOMEPAGE "${QM3D_PACKAGE_HOMEPAGE}")
 endif()
-# The shared libraries the tool and the module link (PCL, stb, OpenMP, the C++ runtime ...) are
+# The shared libraries the tool and the module link (liblzf, stb, OpenMP, the C++ runtime) are
 # found by dpkg-shlibdeps (Debian: dpkg-dev) from the binaries themselves, never listed here.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "${_qm3d_deb_python_depends}")
 # Run-time files read when present: three.js inlined into HTML reports (QM3D_THREE_JS); the
 # qm3d.dask module's pandas and distributed; the -dev packages a program using
-# find_package(qm3d) needs (cmake/qm3dConfig.cmake.in: Eigen, CGAL, PCL, nlohmann-json).
+# find_package(qm3d) needs (cmake/qm3dConfig.cmake.in: Eigen, CGAL, liblzf, nlohmann-json).
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libjs-three")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS
-    "python3-pandas, python3-distributed, libeigen3-dev, libcgal-dev, libpcl-dev, nlohmann-json3-dev")
+    "python3-pandas, python3-distributed, libeigen3-dev, libcgal-dev, liblzf-dev, nlohmann-json3-dev")
 include(CPack)

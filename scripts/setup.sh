@@ -15,7 +15,7 @@ JOBS="${QM3D_JOBS:-$(nproc)}"
 PACKAGES=(
   build-essential cmake pkg-config git ca-certificates curl
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libnanoflann-dev
-  libpcl-dev libopenmpi-dev
+  liblzf-dev libpcl-dev libopenmpi-dev
   nlohmann-json3-dev libcli11-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev

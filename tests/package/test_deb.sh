@@ -69,9 +69,9 @@ depends_on() { depended | grep -Fqx "$1"; }
 for p in libc6 libstdc++6 libgomp1 python3 python3-numpy; do
   depends_on "$p" || fail "Depends does not name $p: $DEPENDS"
 done
-for p in 'libpcl-common[0-9.]*' 'libpcl-io[0-9.]*'; do
-  depended | grep -qx "$p" || fail "Depends does not name PCL's $p: $DEPENDS"
-done
+depends_on liblzf1 || fail "Depends does not name liblzf1 (binary_compressed PCD): $DEPENDS"
+# PCD is read without PCL: its I/O library (VTK, OpenNI, MPI ...) is no dependency of the package.
+if depended | grep -q '^libpcl-\|^libvtk'; then fail "Depends names PCL or VTK: $DEPENDS"; fi
 
 # ---- contents: what `cmake --install` installs, the Python package in Debian's place ----
 quietly "$CMAKE" --install "$BUILD_DIR" --prefix "$SCRATCH/install/usr"

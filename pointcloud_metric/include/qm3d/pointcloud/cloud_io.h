@@ -1,5 +1,5 @@
-// Reading coloured point clouds: PLY (through qm3d::ply) and PCD (through PCL), chosen by the
-// file extension.
+// Reading coloured point clouds: PLY (through qm3d::ply) and PCD (qm3d's own reader, which reads
+// what PCL 1.13's PCDReader reads, without linking PCL), chosen by the file extension.
 #pragma once
 
 #include <filesystem>
@@ -18,8 +18,9 @@ namespace qm3d::pointcloud {
 ///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB), each of COUNT 1
 ///   (other fields may have any COUNT: a field of COUNT n takes n ASCII columns). An ASCII line
 ///   with a value too many or too few, data beyond POINTS or fewer points than it, a binary file
-///   whose size is not POINTS records, and compressed data whose sizes disagree with POINTS are
-///   FormatErrors naming the file (and the line).
+///   whose size is not POINTS records, compressed data whose sizes disagree with POINTS or whose
+///   LZF stream is corrupt, and a point with a non-finite coordinate (the NaN points of an
+///   organised cloud) are FormatErrors naming the file (and the line or point).
 ///
 /// Colours are returned in [0, 1] at double precision; an 8-bit channel u becomes u / 255.0,
 /// exactly as MEPP-team/PCQM converts its colours.
@@ -34,8 +35,7 @@ namespace qm3d::pointcloud {
 /// are dropped here.
 ///
 /// \bug OBJ and OFF meshes are not read here (the mesh reader will provide their vertices).
-/// \bug Points with non-finite coordinates (e.g. organised PCD clouds) are returned as they are;
-///      compute_pcqm rejects them.
+/// \bug Organised PCD clouds with NaN points are refused rather than read without them.
 ColoredCloud read_cloud(const std::filesystem::path& path);
 
 enum class CloudFormat { kPly, kPcd };
