@@ -7,6 +7,7 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/pointcloud/metrics.h"
+#include "qm3d/render/ibsm.h"
 
 namespace qm3d::app {
 
@@ -24,6 +25,7 @@ const Registry& registry() {
     Registry reg;
     mesh::register_metrics(reg);
     pointcloud::register_metrics(reg);
+    render::register_metrics(reg);
     return reg;
   }();
   return r;

@@ -24,6 +24,7 @@
 #include "qm3d/mesh/mesh_io.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/pointcloud/metrics.h"
+#include "qm3d/render/ibsm.h"
 #include "interruptible_call.h"
 
 namespace py = pybind11;
@@ -36,6 +37,7 @@ const Registry& registry() {
     Registry reg;
     mesh::register_metrics(reg);
     pointcloud::register_metrics(reg);
+    render::register_metrics(reg);
     return reg;
   }();
   return r;

@@ -1,0 +1,379 @@
+// IBSM (qm3d/render/ibsm.h). The per-pixel rules are mmetric 1.1.7's (MPEGGroup/mpeg-pcc-mmetric
+// @ 5faa660, source/lib/source/mmCompare.cpp `Compare::ibsm`; colour conversion mmColor.h
+// rgbToYuvBt709_256), reimplemented: float YUV, double squared differences, sums over every
+// view, then MSE = sum / matched pixels.
+#include "qm3d/render/ibsm.h"
+
+#include <omp.h>
+#include <stb/stb_image_write.h>
+
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <stdexcept>
+
+#include "qm3d/common/error.h"
+#include "qm3d/common/version.h"
+#include "qm3d/render/image_quality.h"
+
+namespace qm3d::render {
+
+const std::vector<std::string>& ibsm_value_names() {
+  static const std::vector<std::string> names = {
+      "r_mse",   "g_mse",   "b_mse",   "rgb_mse", "y_mse",    "u_mse",    "v_mse",
+      "yuv_mse", "geo_mse", "r_psnr",  "g_psnr",  "b_psnr",   "rgb_psnr", "y_psnr",
+      "u_psnr",  "v_psnr",  "yuv_psnr", "geo_psnr", "unmatched_pixel_percentage", "ssim",
+      "ms_ssim"};
+  return names;
+}
+
+namespace {
+
+/// mmColor.h rgbToYuvBt709_256, in float as mmetric.
+Float3 yuv_of(float r, float g, float b) {
+  return {0.2126F * r + 0.7152F * g + 0.0722F * b,
+          -0.1146F * r - 0.3854F * g + 0.5000F * b + 128.0F,
+          0.5000F * r - 0.4542F * g - 0.0458F * b + 128.0F};
+}
+
+GreyImage luma_image(const View& v) {
+  GreyImage g;
+  g.width = v.width;
+  g.height = v.height;
+  g.values.resize(static_cast<std::size_t>(v.width) * v.height);
+  for (std::size_t i = 0; i < g.values.size(); ++i) {
+    g.values[i] = yuv_of(v.rgba[i * 4], v.rgba[i * 4 + 1], v.rgba[i * 4 + 2])[0];
+  }
+  return g;
+}
+
+/// Squared errors of the pixels both views cover; the counts (mmetric's steps 0, A, B).
+void add_pixel_errors(const View& a, const View& b, float depth_range, IbsmView& out) {
+  const std::size_t n = a.depth.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool in_a = a.rgba[i * 4 + 3] != 0, in_b = b.rgba[i * 4 + 3] != 0;
+    if (in_a != in_b) ++out.unmatched;
+    if (!(in_a && in_b)) continue;
+    ++out.matched;
+    const float ra = a.rgba[i * 4], ga = a.rgba[i * 4 + 1], ba = a.rgba[i * 4 + 2];
+    const float rb = b.rgba[i * 4], gb = b.rgba[i * 4 + 1], bb = b.rgba[i * 4 + 2];
+    const Float3 rgb_a{ra, ga, ba}, rgb_b{rb, gb, bb};
+    const Float3 yuv_a = yuv_of(ra, ga, ba), yuv_b = yuv_of(rb, gb, bb);
+    for (int c = 0; c < 3; ++c) {
+      const double d_rgb = static_cast<double>(rgb_a[c]) - static_cast<double>(rgb_b[c]);
+      const double d_yuv = static_cast<double>(yuv_a[c]) - static_cast<double>(yuv_b[c]);
+      out.rgb_sse[c] += d_rgb * d_rgb;
+      out.yuv_sse[c] += d_yuv * d_yuv;
+    }
+    const double d = (static_cast<double>(a.depth[i]) - static_cast<double>(b.depth[i])) * 255.0 /
+                     depth_range;
+    out.depth_sse += d * d;
+  }
+}
+
+std::vector<std::uint8_t> both_covered(const View& a, const View& b) {
+  std::vector<std::uint8_t> mask(a.depth.size());
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    mask[i] = a.rgba[i * 4 + 3] != 0 && b.rgba[i * 4 + 3] != 0;
+  }
+  return mask;
+}
+
+IbsmView compare_views(const View& a, const View& b, const Float3& direction, bool image_quality) {
+  IbsmView out;
+  out.direction = direction;
+  out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
+  if (a.drawn_pixels() == 0 || b.drawn_pixels() == 0) {
+    out.left_out = true;
+    return out;
+  }
+  add_pixel_errors(a, b, b.depth_range, out);
+  if (image_quality && out.matched > 0) {
+    const GreyImage la = luma_image(a), lb = luma_image(b);
+    const std::vector<std::uint8_t> mask = both_covered(a, b);
+    out.ssim = masked_ssim(la, lb, mask);
+    out.ms_ssim = masked_ms_ssim(la, lb, mask);
+  }
+  return out;
+}
+
+void write_png(const std::filesystem::path& path, const View& v) {
+  // Rows bottom first in memory: written from the last row up (mmetric writes them flipped too).
+  const std::uint8_t* last_row = v.rgba.data() + static_cast<std::size_t>(v.width) * 4 * (v.height - 1);
+  if (!stbi_write_png(path.string().c_str(), v.width, v.height, 4, last_row, -v.width * 4)) {
+    throw InputError(path.string() + ": cannot write PNG");
+  }
+}
+
+std::string view_file(int index, const char* which) {
+  char name[64];
+  std::snprintf(name, sizeof name, "view_%02d_%s.png", index, which);
+  return name;
+}
+
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+/// Renders and compares every view (views in parallel, each written to its own slot).
+std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderModel& dist,
+                                        const Frame& frame, const std::vector<Float3>& dirs,
+                                        const IbsmOptions& o) {
+  std::vector<IbsmView> out(dirs.size());
+  std::vector<std::exception_ptr> errors(dirs.size());
+  const RasterOptions ro{o.resolution, o.culling};
+  const int n = static_cast<int>(dirs.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(o.threads))
+  for (int i = 0; i < n; ++i) {
+    try {
+      const View a = render_view(ref, frame, dirs[i], ro);
+      const View b = render_view(dist, frame, dirs[i], ro);
+      if (!o.save_views.empty()) {
+        write_png(o.save_views / view_file(i, "reference"), a);
+        write_png(o.save_views / view_file(i, "distorted"), b);
+      }
+      out[i] = compare_views(a, b, dirs[i], o.image_quality);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  return out;
+}
+
+double clipped_psnr(double mse) { return std::min(kPsnrClip, 10.0 * std::log10((255.0 * 255.0) / mse)); }
+
+/// mmetric's pooling: sums over the views, / matched pixels, PSNRs clipped.
+NamedValues pooled_values(const std::vector<IbsmView>& views, std::size_t& matched_out) {
+  double rgb[3] = {0, 0, 0}, yuv[3] = {0, 0, 0}, depth = 0;
+  std::size_t matched = 0, unmatched = 0;
+  double ssim_sum = 0, ms_ssim_sum = 0;
+  std::size_t ssim_views = 0, ms_ssim_views = 0;
+  for (const IbsmView& v : views) {
+    if (v.left_out) continue;
+    for (int c = 0; c < 3; ++c) {
+      rgb[c] += v.rgb_sse[c];
+      yuv[c] += v.yuv_sse[c];
+    }
+    depth += v.depth_sse;
+    matched += v.matched;
+    unmatched += v.unmatched;
+    if (!std::isnan(v.ssim)) ssim_sum += v.ssim, ++ssim_views;
+    if (!std::isnan(v.ms_ssim)) ms_ssim_sum += v.ms_ssim, ++ms_ssim_views;
+  }
+  matched_out = matched;
+  const double m = static_cast<double>(matched);
+  double mse[9];
+  for (int c = 0; c < 3; ++c) {
+    mse[c] = rgb[c] / m;
+    mse[4 + c] = yuv[c] / m;
+  }
+  mse[3] = (mse[0] + mse[1] + mse[2]) / 3.0;
+  mse[7] = (mse[4] * 6.0 + mse[5] + mse[6]) / 8.0;
+  mse[8] = depth / m;
+  const std::vector<std::string>& names = ibsm_value_names();
+  NamedValues out;
+  for (int k = 0; k < 9; ++k) out.emplace_back(names[k], mse[k]);
+  for (int k = 0; k < 9; ++k) out.emplace_back(names[9 + k], clipped_psnr(mse[k]));
+  out.emplace_back("unmatched_pixel_percentage", 100.0 * static_cast<double>(unmatched) / m);
+  if (ssim_views > 0) out.emplace_back("ssim", ssim_sum / static_cast<double>(ssim_views));
+  if (ms_ssim_views > 0) out.emplace_back("ms_ssim", ms_ssim_sum / static_cast<double>(ms_ssim_views));
+  return out;
+}
+
+nlohmann::json view_details(const IbsmView& v) {
+  nlohmann::json j;
+  j["direction"] = {v.direction[0], v.direction[1], v.direction[2]};
+  j["left_out"] = v.left_out;
+  j["matched_pixels"] = v.matched;
+  j["unmatched_pixels"] = v.unmatched;
+  auto finite_or_null = [](double x) { return std::isnan(x) ? nlohmann::json() : nlohmann::json(x); };
+  const double m = static_cast<double>(v.matched);
+  const double yuv_mse = v.matched ? (v.yuv_sse[0] * 6 + v.yuv_sse[1] + v.yuv_sse[2]) / 8 / m : NAN;
+  j["yuv_psnr"] = finite_or_null(v.matched ? clipped_psnr(yuv_mse) : NAN);
+  j["ssim"] = finite_or_null(v.ssim);
+  j["ms_ssim"] = finite_or_null(v.ms_ssim);
+  return j;
+}
+
+void check_options(const IbsmOptions& o) {
+  if (o.views < 2) throw std::invalid_argument("views: at least 2 (mmetric divides by views - 1)");
+  if (o.resolution < 16 || o.resolution > 16384) {
+    throw std::invalid_argument("resolution: 16 to 16384 pixels (got " +
+                                std::to_string(o.resolution) + ")");
+  }
+}
+
+}  // namespace
+
+std::vector<float> view_luma(const View& view) {
+  std::vector<float> out(static_cast<std::size_t>(view.width) * view.height);
+  for (int y = 0; y < view.height; ++y) {
+    for (int x = 0; x < view.width; ++x) {
+      const std::size_t src = static_cast<std::size_t>(view.height - 1 - y) * view.width + x;
+      out[static_cast<std::size_t>(y) * view.width + x] =
+          yuv_of(view.rgba[src * 4], view.rgba[src * 4 + 1], view.rgba[src * 4 + 2])[0];
+    }
+  }
+  return out;
+}
+
+std::vector<View> render_views(const RenderModel& model, const Frame& frame,
+                               const std::vector<Float3>& directions, const RasterOptions& options,
+                               int threads) {
+  std::vector<View> out(directions.size());
+  std::vector<std::exception_ptr> errors(directions.size());
+  const int n = static_cast<int>(directions.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(threads))
+  for (int i = 0; i < n; ++i) {
+    try {
+      out[i] = render_view(model, frame, directions[i], options);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  return out;
+}
+
+MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& distorted,
+                          const IbsmOptions& options, const std::string& reference_name,
+                          const std::string& distorted_name) {
+  const auto start = std::chrono::steady_clock::now();
+  check_options(options);
+  if (!options.save_views.empty()) std::filesystem::create_directories(options.save_views);
+  const Frame frame = frame_of(reference, distorted);
+  const std::vector<Float3> dirs = fibonacci_directions(options.views, options.rotation_deg);
+  const std::vector<IbsmView> views = compare_all_views(reference, distorted, frame, dirs, options);
+  MetricResult r;
+  r.metric = "ibsm";
+  std::size_t left_out = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (!views[i].left_out) continue;
+    ++left_out;
+    r.warnings.push_back("ibsm: view " + std::to_string(i) + ": " +
+                         (reference_name + " or " + distorted_name) +
+                         " draws nothing; view left out");
+  }
+  std::size_t matched = 0;
+  NamedValues values = pooled_values(views, matched);
+  if (matched == 0) {
+    throw NumericError("ibsm: no pixel drawn by both " + reference_name + " and " + distorted_name +
+                       " in any view (" + std::to_string(left_out) + " of " +
+                       std::to_string(views.size()) + " views empty)");
+  }
+  DirectionResult d;
+  d.score = find_value(values, "yuv_psnr").value();
+  d.values = values;
+  r.values = values;
+  r.score = d.score;
+  r.dist_to_ref = d;
+  r.ref_to_dist = d;
+  r.details["box_ratio"] = box_ratio(reference, distorted);
+  r.details["bsphere_center"] = {frame.center[0], frame.center[1], frame.center[2]};
+  r.details["bsphere_radius"] = frame.radius;
+  r.details["views_left_out"] = left_out;
+  if (reference.is_cloud()) r.details["splat_size_reference"] = reference.splat_size;
+  if (distorted.is_cloud()) r.details["splat_size_distorted"] = distorted.splat_size;
+  nlohmann::json per_view = nlohmann::json::array();
+  for (const IbsmView& v : views) per_view.push_back(view_details(v));
+  r.details["views"] = per_view;
+  r.text_note = "YUV PSNR " + std::to_string(d.score) + " dB over " + std::to_string(dirs.size()) +
+                " views";
+  r.provenance.version = kVersion;
+  r.provenance.reference = reference_name;
+  r.provenance.distorted = distorted_name;
+  r.provenance.seconds = seconds_since(start);
+  return r;
+}
+
+}  // namespace qm3d::render
+
+namespace qm3d::render {
+
+RenderModel model_of(const Input& input, const SplatOptions& splats) {
+  try {
+    if (input.is_mesh()) {
+      const MeshData& m = input.mesh();
+      return mesh_model(m.mesh, m.has_colors);
+    }
+    return cloud_model(input.cloud(), splats);
+  } catch (const FormatError& e) {
+    throw FormatError(input.name() + ": " + e.what());
+  }
+}
+
+namespace {
+
+Float3 rotation_of(const nlohmann::json& v) {
+  return {v.at(0).get<float>(), v.at(1).get<float>(), v.at(2).get<float>()};
+}
+
+MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
+                      const OptionValues& v) {
+  IbsmOptions o;
+  static_cast<RunOptions&>(o) = run;
+  o.views = v.at("views").get<int>();
+  o.resolution = v.at("resolution").get<int>();
+  o.rotation_deg = rotation_of(v.at("rotation"));
+  o.culling = !v.at("no_culling").get<bool>();
+  o.image_quality = !v.at("no_ssim").get<bool>();
+  o.splats.size = v.at("splat_size").get<double>();
+  o.save_views = v.at("save_views").get<std::string>();
+  const RenderModel a = model_of(ref, o.splats);
+  const RenderModel b = model_of(dist, o.splats);
+  if (run.inputs_done) run.inputs_done();
+  return compute_ibsm(a, b, o, ref.name(), dist.name());
+}
+
+}  // namespace
+
+MetricSpec ibsm_spec() {
+  MetricSpec s;
+  s.name = "ibsm";
+  s.title = "IBSM";
+  s.reproduces = "MPEG mmetric 1.1.7 compare --mode ibsm, sw_raster (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
+  s.summary =
+      "Image-based quality from rendered views (mmetric's IBSM: PSNR of RGB, YUV and depth over "
+      "the pixels both objects cover, plus SSIM / MS-SSIM of the luma); meshes and point clouds "
+      "(splats); score = YUV PSNR, dB";
+  s.higher_is_better = true;
+  s.applies_to = AppliesTo::kBoth;
+  s.reads = Input::Kind::kCloud;
+  s.reads_two_meshes_as_meshes = true;
+  s.default_direction = Direction::kSymmetric;
+  s.direction_help = "one comparison of the two images of each view (both directions are the same)";
+  s.symmetric_rule = "the same image comparison";
+  s.per_element_on_input = false;
+  s.value_names = ibsm_value_names();
+  for (const std::string& n : s.value_names) {
+    if (n.find("_psnr") != std::string::npos || n == "ssim" || n == "ms_ssim") {
+      s.quality_value_names.push_back(n);
+    }
+  }
+  s.options = {
+      {"views", "Views on a Fibonacci sphere (mmetric --ibsmCameraCount)", 16, {}, 2, 4096},
+      {"resolution", "Width = height of each view, pixels (mmetric --ibsmResolution)", 2048, {}, 16,
+       16384},
+      {"rotation",
+       "Rotation of the views: polar angle, azimuth, magnitude in degrees, applied when the "
+       "magnitude is not 0 (mmetric --ibsmCameraRotation)",
+       nlohmann::json::array({0.0, 0.0, 0.0})},
+      {"no_culling", "Draw back faces too (mmetric --ibsmDisableCulling)", false},
+      {"no_ssim", "Leave out SSIM and MS-SSIM (faster)", false},
+      {"splat_size",
+       "Side of a point cloud's square splats, world units; 0 = 4 x the median nearest-point "
+       "spacing",
+       0.0, {}, 0, 1e300},
+      {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)", ""},
+  };
+  s.run = run_ibsm;
+  return s;
+}
+
+void register_metrics(Registry& registry) { registry.add(ibsm_spec()); }
+
+}  // namespace qm3d::render

@@ -1,0 +1,434 @@
+// The rasteriser (qm3d/render/raster.h). Rules and their places in mmetric 1.1.7
+// (MPEGGroup/mpeg-pcc-mmetric @ 5faa660), reimplemented here:
+// - canonical order: source/lib/include/mmModel.h `reorder(..., "oriented", ...)`;
+// - bounding box, sphere, camera: mmCompare.cpp `ibsm`, mmRendererSw.cpp `RendererSw::render`;
+// - coverage, depth, colour: mmRendererSw.cpp `rasterize` with `ShaderCpv` / `ShaderRed`;
+// - views: mmCompare.cpp `fibonacciSphere`.
+// Every float expression keeps mmetric's (GLM's) order of operations (float_ops.h).
+#include "qm3d/render/raster.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <limits>
+#include <nanoflann.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "float_ops.h"
+#include "qm3d/common/error.h"
+
+namespace qm3d::render {
+
+using detail::F3;
+using detail::F4;
+using detail::M4;
+
+namespace {
+
+F3 f3(const Float3& a) { return {a[0], a[1], a[2]}; }
+Float3 arr(F3 a) { return {a.x, a.y, a.z}; }
+
+/// mmetric's colour of a value in [0, 1]: roundf((float)value * 255) (mmIO.cpp `_loadObj`; PLY
+/// integers give the same integer back).
+float colour_255(double c) { return std::roundf(static_cast<float>(c) * 255.0f); }
+
+struct VertexKey {
+  Float3 pos;
+  Float3 col;
+};
+/// mmModel.h CompareVertex: lexicographic on position, then colour (float <, so -0 == +0).
+bool key_less(const VertexKey& a, const VertexKey& b) {
+  for (int k = 0; k < 3; ++k) {
+    if (a.pos[k] != b.pos[k]) return a.pos[k] < b.pos[k];
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (a.col[k] != b.col[k]) return a.col[k] < b.col[k];
+  }
+  return false;
+}
+
+/// Rotates a face so that its smallest index comes first, keeping its orientation (mmetric's
+/// "oriented" rule, ties included).
+Triangle rotate_to_smallest(Triangle t) {
+  if (t[1] < t[0] && t[1] <= t[2]) return {t[1], t[2], t[0]};
+  if (t[2] <= t[0] && t[2] < t[1]) return {t[2], t[0], t[1]};
+  return t;
+}
+
+/// The unique vertex keys of the faces' vertices in sorted order (the first of equal keys, in
+/// order of first use, represents them) and each file vertex's rank among them.
+std::vector<VertexKey> sorted_vertices(const std::vector<VertexKey>& keys,
+                                       const std::vector<Triangle>& faces,
+                                       std::vector<std::uint32_t>& rank_of) {
+  std::vector<std::uint32_t> first_use;
+  std::vector<char> seen(keys.size(), 0);
+  for (const Triangle& t : faces) {
+    for (std::uint32_t v : t) {
+      if (!seen[v]) first_use.push_back(v);
+      seen[v] = 1;
+    }
+  }
+  std::stable_sort(first_use.begin(), first_use.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return key_less(keys[a], keys[b]); });
+  std::vector<VertexKey> unique;
+  rank_of.assign(keys.size(), 0);
+  for (std::uint32_t v : first_use) {
+    if (unique.empty() || key_less(unique.back(), keys[v])) unique.push_back(keys[v]);
+    rank_of[v] = static_cast<std::uint32_t>(unique.size() - 1);
+  }
+  return unique;
+}
+
+}  // namespace
+
+RenderModel mesh_model(const ColoredMesh& mesh, bool has_colors) {
+  if (mesh.triangles.empty()) throw FormatError("mesh has no faces to render");
+  has_colors = has_colors && mesh.colors.size() == mesh.positions.size();
+  std::vector<VertexKey> keys(mesh.positions.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const Vec3& p = mesh.positions[i];
+    keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
+    if (has_colors) {
+      const Rgb& c = mesh.colors[i];
+      keys[i].col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
+    } else {
+      keys[i].col = {0, 0, 0};
+    }
+  }
+  std::vector<std::uint32_t> rank_of;
+  const std::vector<VertexKey> unique = sorted_vertices(keys, mesh.triangles, rank_of);
+  RenderModel out;
+  for (const VertexKey& k : unique) {
+    out.positions.push_back(k.pos);
+    if (has_colors) out.colors_255.push_back(k.col);
+  }
+  out.triangles.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) {
+    out.triangles.push_back(rotate_to_smallest({rank_of[t[0]], rank_of[t[1]], rank_of[t[2]]}));
+  }
+  std::sort(out.triangles.begin(), out.triangles.end());
+  out.triangles.erase(std::unique(out.triangles.begin(), out.triangles.end()),
+                      out.triangles.end());
+  return out;
+}
+
+namespace {
+
+struct PointsAdaptor {
+  const std::vector<Float3>& points;
+  std::size_t kdtree_get_point_count() const { return points.size(); }
+  float kdtree_get_pt(std::size_t i, std::size_t d) const { return points[i][d]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+using PointsTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>, PointsAdaptor, 3, std::uint32_t>;
+
+/// The median distance of a point to its nearest point at a distance > 0, over an evenly
+/// spaced subset of the points; 0 when no point has such a neighbour.
+double median_spacing(const std::vector<Float3>& points) {
+  const PointsAdaptor adaptor{points};
+  const PointsTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  const std::size_t step = std::max<std::size_t>(1, (points.size() + kSpacingSamples - 1) /
+                                                        kSpacingSamples);
+  constexpr std::size_t kNeighbours = 8;  // enough to pass a few coincident points
+  std::vector<double> spacing;
+  for (std::size_t i = 0; i < points.size(); i += step) {
+    std::uint32_t index[kNeighbours];
+    float dist2[kNeighbours];
+    const std::size_t n = tree.knnSearch(points[i].data(), kNeighbours, index, dist2);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (dist2[k] > 0) {
+        spacing.push_back(std::sqrt(static_cast<double>(dist2[k])));
+        break;
+      }
+    }
+  }
+  if (spacing.empty()) return 0;
+  auto mid = spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2);
+  std::nth_element(spacing.begin(), mid, spacing.end());
+  return *mid;
+}
+
+}  // namespace
+
+RenderModel cloud_model(const ColoredCloud& cloud, const SplatOptions& options) {
+  if (cloud.positions.empty()) throw FormatError("point cloud has no points to render");
+  std::vector<VertexKey> keys(cloud.positions.size());
+  const bool has_colors = cloud.colors.size() == cloud.positions.size();
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const Vec3& p = cloud.positions[i];
+    keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
+    if (has_colors) {
+      const Rgb& c = cloud.colors[i];
+      keys[i].col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
+    }
+  }
+  std::sort(keys.begin(), keys.end(), key_less);
+  keys.erase(std::unique(keys.begin(), keys.end(),
+                         [](const VertexKey& a, const VertexKey& b) {
+                           return !key_less(a, b) && !key_less(b, a);
+                         }),
+             keys.end());
+  RenderModel out;
+  for (const VertexKey& k : keys) {
+    out.positions.push_back(k.pos);
+    if (has_colors) out.colors_255.push_back(k.col);
+  }
+  double size = options.size;
+  if (size <= 0) size = kAutoSplatFactor * median_spacing(out.positions);
+  if (!(size > 0) || !std::isfinite(size)) {
+    throw FormatError("point cloud: no two distinct points, so no splat size (give one)");
+  }
+  out.splat_size = static_cast<float>(size);
+  return out;
+}
+
+namespace {
+
+/// mmGeometry.h computeBBox (fmin / fmax from +-FLT_MAX), over several models.
+void grow_box(const RenderModel& m, F3& lo, F3& hi) {
+  for (const Float3& p : m.positions) {
+    lo = {std::fmin(p[0], lo.x), std::fmin(p[1], lo.y), std::fmin(p[2], lo.z)};
+    hi = {std::fmax(p[0], hi.x), std::fmax(p[1], hi.y), std::fmax(p[2], hi.z)};
+  }
+}
+double box_diagonal(const RenderModel& m) {
+  F3 lo{FLT_MAX, FLT_MAX, FLT_MAX}, hi{-FLT_MAX, -FLT_MAX, -FLT_MAX};
+  grow_box(m, lo, hi);
+  return detail::length(hi - lo);
+}
+
+}  // namespace
+
+Frame frame_of(const RenderModel& a, const RenderModel& b) {
+  F3 lo_a{FLT_MAX, FLT_MAX, FLT_MAX}, hi_a{-FLT_MAX, -FLT_MAX, -FLT_MAX};
+  F3 lo_b = lo_a, hi_b = hi_a;
+  grow_box(a, lo_a, hi_a);
+  grow_box(b, lo_b, hi_b);
+  // glm::min / glm::max of the two boxes, then RendererSw::render's sphere.
+  const F3 lo{std::min(lo_a.x, lo_b.x), std::min(lo_a.y, lo_b.y), std::min(lo_a.z, lo_b.z)};
+  const F3 hi{std::max(hi_a.x, hi_b.x), std::max(hi_a.y, hi_b.y), std::max(hi_a.z, hi_b.z)};
+  const F3 half = (hi - lo) * 0.5f;
+  Frame f;
+  f.center = arr(lo + half);
+  float radius = detail::length(half);
+  radius = radius + radius / 100.0f;  // mmetric: 1 % so that the object stays off the borders
+  f.radius = radius;
+  return f;
+}
+
+double box_ratio(const RenderModel& a, const RenderModel& b) {
+  return 100.0 * box_diagonal(b) / box_diagonal(a);
+}
+
+std::vector<Float3> fibonacci_directions(int count, const Float3& rotation_deg) {
+  if (count < 2) throw std::invalid_argument("views: at least 2 (got " + std::to_string(count) + ")");
+  const bool rotate = rotation_deg[2] != 0.0f;
+  M4 rot = detail::identity();
+  if (rotate) {
+    constexpr float kRadPerDeg = static_cast<float>(0.01745329251994329576923690768489);  // glm::radians
+    const float inclination = rotation_deg[0] * kRadPerDeg;
+    const float azimuth = rotation_deg[1] * kRadPerDeg;
+    const float intrinsic = rotation_deg[2] * kRadPerDeg;
+    const float r = std::abs(std::sin(inclination));
+    const F3 axis{std::cos(azimuth) * r, std::cos(inclination), std::sin(azimuth) * r};
+    rot = detail::rotation(intrinsic, axis);
+  }
+  const double pi = std::atan(1.0) * 4;
+  const float golden_rad = static_cast<float>(pi * (3. - std::sqrt(5.)));
+  std::vector<Float3> out;
+  for (int i = 0; i < count; ++i) {
+    const float fi = static_cast<float>(i);
+    const float y = 1 - (fi / static_cast<float>(count - 1)) * 2;
+    const float radius = std::sqrt(1 - y * y);
+    const float theta = golden_rad * fi;
+    F3 pos{std::cos(theta) * radius, y, std::sin(theta) * radius};
+    if (rotate) {
+      const F4 r = detail::mul(rot, F4{pos.x, pos.y, pos.z, 1.0f});
+      pos = {r.x, r.y, r.z};
+    }
+    out.push_back(arr(pos));
+  }
+  return out;
+}
+
+std::size_t View::drawn_pixels() const {
+  std::size_t n = 0;
+  for (std::size_t i = 3; i < rgba.size(); i += 4) n += rgba[i] != 0;
+  return n;
+}
+
+namespace {
+
+/// The transforms of one view (RendererSw::render).
+struct Camera {
+  M4 mvp;
+  M4 viewport;
+  float depth_range = 0;
+  float pixels_per_unit = 0;
+};
+
+/// mmCompare.cpp: the up vector is +z for a view along +-y, +y otherwise.
+F3 up_for(F3 dir) {
+  const F3 d = F3{0, 1, 0} - F3{std::abs(dir.x), std::abs(dir.y), std::abs(dir.z)};
+  return detail::length(d) < 1e-6 ? F3{0, 0, 1} : F3{0, 1, 0};
+}
+
+Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
+  const F3 dir = detail::normalize(direction);
+  const F3 up = detail::normalize(up_for(direction));
+  const float ratio = static_cast<float>(width) / static_cast<float>(height);
+  const F3 center = f3(frame.center);
+  const float radius = frame.radius;
+  const F3 eye = center + dir * radius;
+  const M4 view = detail::look_at(eye, center, up);
+  const M4 glob = detail::mul(detail::translation({ratio * radius, radius, 0}),
+                              detail::scaling({1.0f, 1.0f, -1.0f}));
+  const M4 proj = detail::ortho(-ratio * radius, ratio * radius, -radius, radius, 0.0f,
+                                2.0f * radius);
+  const M4 model_view = detail::mul(view, detail::identity());
+  Camera c;
+  c.mvp = detail::mul(detail::mul(proj, glob), model_view);
+  const F3 far_point = eye - dir * radius * 2.0f;
+  c.depth_range = std::abs(detail::mul(c.mvp, F4{far_point.x, far_point.y, far_point.z, 1.0f}).z);
+  // viewport(0, 0, w, h) as mmetric builds it: its columns (w/2, 0, w/2, 0), (0, h/2, h/2, 0).
+  c.viewport.c[0] = {static_cast<float>(width / 2.), 0, static_cast<float>(width / 2.), 0};
+  c.viewport.c[1] = {0, static_cast<float>(height / 2.), static_cast<float>(height / 2.), 0};
+  c.viewport.c[2] = {0, 0, 1, 0};
+  c.viewport.c[3] = {0, 0, 0, 1};
+  c.pixels_per_unit = static_cast<float>(width) / (2.0f * ratio * radius);
+  return c;
+}
+
+struct Target {
+  int width, height;
+  std::uint8_t* rgba;
+  float* depth;
+};
+
+void write_pixel(const Target& t, int x, int y, float depth, const float colour[3]) {
+  const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
+  t.depth[i] = depth;
+  for (int c = 0; c < 3; ++c) {
+    t.rgba[i * 4 + c] = static_cast<std::uint8_t>(static_cast<int>(std::roundf(colour[c])));
+  }
+  t.rgba[i * 4 + 3] = 255;
+}
+
+/// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
+/// writes each pixel at most once, so the order within a face does not matter).
+void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const Float3* colour) {
+  float lo[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
+  float hi[2] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+  const float clamp[2] = {static_cast<float>(t.width - 1), static_cast<float>(t.height - 1)};
+  for (int i = 0; i < 3; ++i) {
+    const float p[2] = {pts[i].x / pts[i].w, pts[i].y / pts[i].w};
+    for (int j = 0; j < 2; ++j) {
+      lo[j] = std::max(0.0f, std::min(lo[j], p[j]));
+      hi[j] = std::min(clamp[j], std::max(hi[j], p[j]));
+    }
+  }
+  // u = cross((p2x - p0x, p1x - p0x, p0x - x), (p2y - p0y, p1y - p0y, p0y - y)).
+  const float ax = pts[2].x - pts[0].x, ay = pts[1].x - pts[0].x;
+  const float bx = pts[2].y - pts[0].y, by = pts[1].y - pts[0].y;
+  const float uz = ax * by - bx * ay;
+  const float z0 = clip[0].z, z1 = clip[1].z, z2 = clip[2].z;
+  const float w0 = pts[0].w, w1 = pts[1].w, w2 = pts[2].w;
+  for (int y = static_cast<int>(lo[1]); y <= static_cast<int>(hi[1]); ++y) {
+    const float bz = pts[0].y - static_cast<float>(y);
+    for (int x = static_cast<int>(lo[0]); x <= static_cast<int>(hi[0]); ++x) {
+      const float az = pts[0].x - static_cast<float>(x);
+      const float ux = ay * bz - by * az;
+      const float uy = az * bx - bz * ax;
+      const float s0 = 1.f - (ux + uy) / uz, s1 = uy / uz, s2 = ux / uz;
+      const float c0 = s0 / w0, c1 = s1 / w1, c2 = s2 / w2;
+      const float depth = z0 * c0 + z1 * c1 + z2 * c2;
+      if (std::isnan(depth)) continue;
+      const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
+      if (s0 < 0 || s1 < 0 || s2 < 0 || depth <= t.depth[i]) continue;
+      float rgb[3] = {255, 0, 0};  // ShaderRed
+      if (colour) {
+        for (int c = 0; c < 3; ++c) rgb[c] = colour[0][c] * c0 + colour[1][c] * c1 + colour[2][c] * c2;
+      }
+      write_pixel(t, x, y, depth, rgb);
+    }
+  }
+}
+
+void draw_mesh(const Target& t, const RenderModel& m, const Camera& cam, bool culling) {
+  const bool coloured = !m.colors_255.empty();
+  for (const Triangle& tri : m.triangles) {
+    F4 clip[3];
+    for (int k = 0; k < 3; ++k) {
+      const Float3& p = m.positions[tri[k]];
+      clip[k] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
+    }
+    if (culling) {  // clockwise faces culled (mmetric's default cwCulling)
+      const F3 e1{clip[1].x - clip[0].x, clip[1].y - clip[0].y, clip[1].z - clip[0].z};
+      const F3 e2{clip[2].x - clip[0].x, clip[2].y - clip[0].y, clip[2].z - clip[0].z};
+      if (detail::cross(e1, e2).z <= 0) continue;
+    }
+    const F4 pts[3] = {detail::mul(cam.viewport, clip[0]), detail::mul(cam.viewport, clip[1]),
+                       detail::mul(cam.viewport, clip[2])};
+    Float3 colour[3];
+    if (coloured) {
+      for (int k = 0; k < 3; ++k) colour[k] = m.colors_255[tri[k]];
+    }
+    draw_face(t, clip, pts, coloured ? colour : nullptr);
+  }
+}
+
+void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
+  const float half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
+  const bool coloured = !m.colors_255.empty();
+  for (std::size_t i = 0; i < m.positions.size(); ++i) {
+    const Float3& p = m.positions[i];
+    const F4 clip = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
+    const F4 pt = detail::mul(cam.viewport, clip);
+    const float px = pt.x / pt.w, py = pt.y / pt.w;
+    const int x0 = static_cast<int>(std::max(0.0f, std::ceil(px - half_px)));
+    const int y0 = static_cast<int>(std::max(0.0f, std::ceil(py - half_px)));
+    const int x1 = static_cast<int>(std::min(static_cast<float>(t.width - 1), std::floor(px + half_px)));
+    const int y1 = static_cast<int>(std::min(static_cast<float>(t.height - 1), std::floor(py + half_px)));
+    const float rgb[3] = {coloured ? m.colors_255[i][0] : 255.0f,
+                          coloured ? m.colors_255[i][1] : 0.0f,
+                          coloured ? m.colors_255[i][2] : 0.0f};
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const std::size_t k = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
+        if (clip.z <= t.depth[k]) continue;
+        write_pixel(t, x, y, clip.z, rgb);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
+                 const RasterOptions& options) {
+  if (options.resolution < 1) {
+    throw std::invalid_argument("resolution: at least 1 pixel (got " +
+                                std::to_string(options.resolution) + ")");
+  }
+  View v;
+  v.width = v.height = options.resolution;
+  const std::size_t n = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
+  v.rgba.assign(n * 4, 0);
+  v.depth.assign(n, -FLT_MAX);  // RendererSw's clear depth
+  const Camera cam = camera_for(frame, f3(direction), v.width, v.height);
+  v.depth_range = cam.depth_range;
+  const Target t{v.width, v.height, v.rgba.data(), v.depth.data()};
+  if (model.is_cloud()) {
+    draw_splats(t, model, cam);
+  } else {
+    draw_mesh(t, model, cam, options.culling);
+  }
+  return v;
+}
+
+}  // namespace qm3d::render

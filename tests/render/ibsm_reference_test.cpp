@@ -1,0 +1,131 @@
+// mmetric 1.1.7's IBSM cases (shared/data/reference/mpeg/mm_ibsm_reference.csv, README there:
+// `mm compare --mode ibsm` with the software rasteriser): every printed value within 1e-6
+// relative, PSNRs clipped at 99.99 as mmetric prints them, the bounding sphere too. SSIM is left
+// out (--no-ssim): mmetric has none, and it is the slowest part.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "qm3d/common/metric.h"
+#include "qm3d/mesh/metrics.h"
+#include "qm3d/render/ibsm.h"
+#include "test_paths.h"
+
+namespace qm3d::render {
+namespace {
+
+using Row = std::map<std::string, std::string>;
+
+std::vector<Row> reference_rows() {
+  std::ifstream in(test::reference_dir() / "mpeg" / "mm_ibsm_reference.csv");
+  auto split = [](const std::string& line) {
+    std::vector<std::string> f;
+    std::stringstream s(line);
+    std::string item;
+    while (std::getline(s, item, ';')) f.push_back(item);
+    return f;
+  };
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = split(line);
+  std::vector<Row> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    const std::vector<std::string> f = split(line);
+    Row r;
+    for (std::size_t i = 0; i < header.size(); ++i) r[header[i]] = i < f.size() ? f[i] : "";
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+/// mmetric's ibsm options as qm3d's.
+OptionValues options_of(const std::string& args) {
+  OptionValues o = {{"no_ssim", true}};
+  std::stringstream s(args);
+  std::string word;
+  while (s >> word) {
+    if (word == "--ibsmResolution") s >> word, o["resolution"] = std::stoi(word);
+    if (word == "--ibsmCameraCount") s >> word, o["views"] = std::stoi(word);
+    if (word == "--ibsmDisableCulling") o["no_culling"] = true;
+    if (word == "--ibsmCameraRotation") {
+      std::string a, b, c;
+      s >> a >> b >> c;
+      auto num = [](std::string t) {
+        t.erase(std::remove(t.begin(), t.end(), '"'), t.end());
+        return std::stod(t);
+      };
+      o["rotation"] = {num(a), num(b), num(c)};
+    }
+  }
+  return o;
+}
+
+const Registry& registry() {
+  static const Registry r = [] {
+    Registry reg;
+    mesh::register_metrics(reg);
+    register_metrics(reg);
+    return reg;
+  }();
+  return r;
+}
+
+/// Relative difference (absolute when the expected value is 0).
+double deviation(double got, double want) {
+  if (want == 0) return std::abs(got);
+  return std::abs(got - want) / std::abs(want);
+}
+
+constexpr double kTolerance = 1e-6;
+
+const std::map<std::string, std::string> kColumns = {
+    {"UnmatchedPixelPercentage", "unmatched_pixel_percentage"},
+    {"R_MSE", "r_mse"}, {"G_MSE", "g_mse"}, {"B_MSE", "b_mse"}, {"RGB_MSE", "rgb_mse"},
+    {"Y_MSE", "y_mse"}, {"U_MSE", "u_mse"}, {"V_MSE", "v_mse"}, {"YUV_MSE", "yuv_mse"},
+    {"GEO_MSE", "geo_mse"}, {"R_PSNR", "r_psnr"}, {"G_PSNR", "g_psnr"}, {"B_PSNR", "b_psnr"},
+    {"RGB_PSNR", "rgb_psnr"}, {"Y_PSNR", "y_psnr"}, {"U_PSNR", "u_psnr"}, {"V_PSNR", "v_psnr"},
+    {"YUV_PSNR", "yuv_psnr"}, {"GEO_PSNR", "geo_psnr"}};
+
+TEST(IbsmReference, EveryValueOfEveryCase) {
+  const std::vector<Row> rows = reference_rows();
+  ASSERT_EQ(rows.size(), 10u);
+  double worst = 0;
+  std::string worst_where;
+  RunOptions run;
+  run.threads = 2;
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.at("case"));
+    const Input a = registry().read(test::shared_data() / row.at("mesh_a"));
+    const Input b = registry().read(test::shared_data() / row.at("mesh_b"));
+    const MetricResult r = run_metric(registry().get("ibsm"), a, b, run, options_of(row.at("args")));
+    auto check = [&](const std::string& what, double got, double want) {
+      const double d = deviation(got, want);
+      EXPECT_LE(d, kTolerance) << what << ": got " << got << ", mmetric " << want;
+      if (d > worst) worst = d, worst_where = row.at("case") + " " + what;
+    };
+    for (const auto& [column, name] : kColumns) {
+      const auto got = find_value(r.values, name);
+      ASSERT_TRUE(got) << name;
+      check(column, *got, std::stod(row.at(column)));
+    }
+    check("BoxRatio", r.details.at("box_ratio").get<double>(), std::stod(row.at("BoxRatio")));
+    check("BSphereRad", r.details.at("bsphere_radius").get<double>(), std::stod(row.at("BSphereRad")));
+    std::stringstream ctr(row.at("BSphereCtr"));
+    for (int k = 0; k < 3; ++k) {
+      double want;
+      ctr >> want;
+      check("BSphereCtr", r.details.at("bsphere_center").at(k).get<double>(), want);
+    }
+    EXPECT_DOUBLE_EQ(r.score, *find_value(r.values, "yuv_psnr"));
+  }
+  std::cout << "[ibsm reference] worst relative deviation " << worst << " (" << worst_where << ")\n";
+}
+
+}  // namespace
+}  // namespace qm3d::render
