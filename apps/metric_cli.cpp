@@ -76,10 +76,19 @@ void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& spe
         cli.given[o.name] = cmd->add_flag(flag, cli.flags[o.name], help);
         continue;
       }
-      CLI::Option* opt = cmd->add_option(flag, cli.text[o.name], help);
       if (d.is_array()) {
-        opt->type_name("LIST")->default_str(d.dump());
-      } else {
+        // A fixed-length list: `--rotation 30 60 45` or `--rotation 30,60,45`.
+        const int n = static_cast<int>(d.size());
+        CLI::Option* opt = cmd->add_option(flag, cli.lists[o.name], help)
+                               ->expected(1, n)
+                               ->delimiter(',')
+                               ->type_name("NUM x" + std::to_string(n))
+                               ->default_str(d.dump());
+        cli.given[o.name] = opt;
+        continue;
+      }
+      CLI::Option* opt = cmd->add_option(flag, cli.text[o.name], help);
+      {
         opt->default_str(d.is_string() ? d.get<std::string>() : d.dump());
       }
       if (!o.choices.empty()) opt->check(CLI::IsMember(o.choices));
@@ -105,7 +114,12 @@ OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
         values[o.name] = cli.flags.at(o.name);
         continue;
       }
-      const std::string& text = cli.text.at(o.name);
+      std::string text;
+      if (d.is_array()) {
+        for (const std::string& item : cli.lists.at(o.name)) text += (text.empty() ? "" : ",") + item;
+      } else {
+        text = cli.text.at(o.name);
+      }
       const auto bad = [&] {
         return std::invalid_argument(cli_flag(o.name) + ": '" + text + "' is not " +
                                      (d.is_number_integer() ? "an integer"

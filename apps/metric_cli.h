@@ -15,6 +15,7 @@ namespace qm3d::app {
 // The values of the metrics' own options as given on the command line (before conversion).
 struct MetricOptionsCli {
   std::map<std::string, std::string> text;  // name -> value as typed
+  std::map<std::string, std::vector<std::string>> lists;  // list options: the values as typed
   std::map<std::string, bool> flags;        // boolean options
   std::map<std::string, CLI::Option*> given;
 };
