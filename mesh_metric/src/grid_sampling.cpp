@@ -101,32 +101,6 @@ struct Colouring {
 /// OBJ's float colour: mmetric's roundf(value * 255) on the float.
 float to_255(double c) { return std::round(static_cast<float>(c) * 255.0f); }
 
-/// I: texture2D (nearest, v flipped) and texture2D_bilinear on an 8-bit image.
-Float3 texel(const TextureImage& img, int x, int y) {
-  x = std::min(std::max(x, 0), img.width - 1);
-  y = img.height - 1 - std::min(std::max(y, 0), img.height - 1);
-  const Rgb& c = img.texels[static_cast<std::size_t>(y) * img.width + x];
-  return {to_255(c.r), to_255(c.g), to_255(c.b)};
-}
-
-Float3 texture_lookup(const TextureImage& img, float u, float v, bool bilinear) {
-  if (!bilinear) {
-    return texel(img, static_cast<int>(u * static_cast<float>(img.width)),
-                 static_cast<int>(v * static_cast<float>(img.height)));
-  }
-  const float px = u * static_cast<float>(img.width) - 0.5f;
-  const float py = v * static_cast<float>(img.height) - 0.5f;
-  const float fx0 = std::floor(px), fy0 = std::floor(py);
-  const int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
-  const float fx = px - fx0, fy = py - fy0;  // glm::fract
-  const Float3 tl = texel(img, x0, y0), tr = texel(img, x0 + 1, y0);
-  const Float3 bl = texel(img, x0, y0 + 1), br = texel(img, x0 + 1, y0 + 1);
-  const auto mix = [](const Float3& a, const Float3& b, float t) {  // glm::mix: a + t (b - a)
-    return Float3{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
-  };
-  return mix(mix(tl, tr, fx), mix(bl, br, fx), fy);
-}
-
 struct Grid {
   Float3 min;
   Float3 max;
@@ -201,7 +175,7 @@ TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Col
         if (image != nullptr) {
           const float u = uv[0][0] * w0 + uv[1][0] * res[1] + uv[2][0] * res[2];
           const float v = uv[0][1] * w0 + uv[1][1] * res[1] + uv[2][1] * res[2];
-          s.col = texture_lookup(*image, u, v, colouring.bilinear);
+          s.col = mm_texture_lookup(*image, u, v, colouring.bilinear);
         } else {
           for (int k = 0; k < 3; ++k) {
             s.col[k] = col[0][k] * w0 + col[1][k] * res[1] + col[2][k] * res[2];

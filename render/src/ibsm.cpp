@@ -14,7 +14,9 @@
 #include <stdexcept>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/file_io.h"
 #include "qm3d/common/version.h"
+#include "qm3d/mesh/texture.h"
 #include "qm3d/render/image_quality.h"
 
 namespace qm3d::render {
@@ -120,7 +122,7 @@ std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderMode
                                         const IbsmOptions& o) {
   std::vector<IbsmView> out(dirs.size());
   std::vector<std::exception_ptr> errors(dirs.size());
-  const RasterOptions ro{o.resolution, o.culling};
+  const RasterOptions ro{o.resolution, o.culling, o.lighting};
   const int n = static_cast<int>(dirs.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(o.threads))
   for (int i = 0; i < n; ++i) {
@@ -198,6 +200,10 @@ nlohmann::json view_details(const IbsmView& v) {
 }
 
 void check_options(const IbsmOptions& o) {
+  if (o.layout == ViewLayout::kCmdm18) {
+    if (o.views != 16) throw std::invalid_argument("views: applies to the fibonacci layout (cmdm18 has 18)");
+    if (o.rotation_deg[2] != 0) throw std::invalid_argument("rotation: applies to the fibonacci layout");
+  }
   if (o.views < 2) throw std::invalid_argument("views: at least 2 (mmetric divides by views - 1)");
   if (o.resolution < 16 || o.resolution > 16384) {
     throw std::invalid_argument("resolution: 16 to 16384 pixels (got " +
@@ -246,7 +252,7 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   check_options(options);
   if (!options.save_views.empty()) std::filesystem::create_directories(options.save_views);
   const Frame frame = frame_of(reference, distorted);
-  const std::vector<Float3> dirs = fibonacci_directions(options.views, options.rotation_deg);
+  const std::vector<Float3> dirs = view_directions(options);
   const std::vector<IbsmView> views = compare_all_views(reference, distorted, frame, dirs, options);
   MetricResult r;
   r.metric = "ibsm";
@@ -276,6 +282,12 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   r.details["bsphere_center"] = {frame.center[0], frame.center[1], frame.center[2]};
   r.details["bsphere_radius"] = frame.radius;
   r.details["views_left_out"] = left_out;
+  r.details["render"] = {
+      {"layout", options.layout == ViewLayout::kCmdm18 ? "cmdm18" : "fibonacci"},
+      {"resolution", options.resolution},
+      {"culling", options.culling},
+      {"lighting", options.lighting == Lighting::kHeadlight ? "headlight" : "none"},
+      {"splat_shape", options.splats.shape == SplatShape::kDisc ? "disc" : "square"}};
   if (reference.is_cloud()) r.details["splat_size_reference"] = reference.splat_size;
   if (distorted.is_cloud()) r.details["splat_size_distorted"] = distorted.splat_size;
   nlohmann::json per_view = nlohmann::json::array();
@@ -296,6 +308,12 @@ namespace qm3d::render {
 
 RenderModel model_of(const Input& input, const SplatOptions& splats) {
   try {
+    if (input.is_mesh() && !input.path().empty() && input.format() == FileFormat::kObj) {
+      const std::string bytes = read_file_bytes(input.path());
+      if (mesh::obj_is_textured(bytes)) {
+        return textured_mesh_model(mesh::parse_textured_obj(bytes, input.path()));
+      }
+    }
     if (input.is_mesh()) {
       const MeshData& m = input.mesh();
       return mesh_model(m.mesh, m.has_colors);
@@ -308,21 +326,9 @@ RenderModel model_of(const Input& input, const SplatOptions& splats) {
 
 namespace {
 
-Float3 rotation_of(const nlohmann::json& v) {
-  return {v.at(0).get<float>(), v.at(1).get<float>(), v.at(2).get<float>()};
-}
-
 MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
                       const OptionValues& v) {
-  IbsmOptions o;
-  static_cast<RunOptions&>(o) = run;
-  o.views = v.at("views").get<int>();
-  o.resolution = v.at("resolution").get<int>();
-  o.rotation_deg = rotation_of(v.at("rotation"));
-  o.culling = !v.at("no_culling").get<bool>();
-  o.image_quality = !v.at("no_ssim").get<bool>();
-  o.splats.size = v.at("splat_size").get<double>();
-  o.save_views = v.at("save_views").get<std::string>();
+  const IbsmOptions o = ibsm_options(v, run);
   const RenderModel a = model_of(ref, o.splats);
   const RenderModel b = model_of(dist, o.splats);
   if (run.inputs_done) run.inputs_done();
@@ -330,6 +336,82 @@ MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, co
 }
 
 }  // namespace
+
+std::vector<Float3> view_directions(const IbsmOptions& options) {
+  if (options.layout == ViewLayout::kCmdm18) return cmdm18_directions();
+  return fibonacci_directions(options.views, options.rotation_deg);
+}
+
+IbsmOptions ibsm_options(const OptionValues& v, const RunOptions& run) {
+  IbsmOptions o;
+  static_cast<RunOptions&>(o) = run;
+  o.layout = v.at("layout").get<std::string>() == "cmdm18" ? ViewLayout::kCmdm18
+                                                            : ViewLayout::kFibonacci;
+  o.views = v.at("views").get<int>();
+  o.resolution = v.at("resolution").get<int>();
+  const nlohmann::json& r = v.at("rotation");
+  o.rotation_deg = {r.at(0).get<float>(), r.at(1).get<float>(), r.at(2).get<float>()};
+  o.culling = !v.at("no_culling").get<bool>();
+  o.lighting = v.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight
+                                                                   : Lighting::kUnlit;
+  o.image_quality = !v.at("no_ssim").get<bool>();
+  o.splats.size = v.at("splat_size").get<double>();
+  o.splats.shape = v.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc
+                                                                     : SplatShape::kSquare;
+  o.save_views = v.at("save_views").get<std::string>();
+  return o;
+}
+
+std::vector<std::uint8_t> png_bytes(const View& v) {
+  std::vector<std::uint8_t> out;
+  const auto append = [](void* context, void* data, int size) {
+    auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);
+    const auto* p = static_cast<const std::uint8_t*>(data);
+    bytes->insert(bytes->end(), p, p + size);
+  };
+  const std::uint8_t* last_row =
+      v.rgba.data() + static_cast<std::size_t>(v.width) * 4 * (v.height - 1);
+  if (!stbi_write_png_to_func(append, &out, v.width, v.height, 4, last_row, -v.width * 4)) {
+    throw NumericError("PNG encoding of a view failed");
+  }
+  return out;
+}
+
+std::vector<ViewPair> result_view_pairs(const MetricResult& result, const Input& reference,
+                                        const Input& distorted, int resolution, int threads) {
+  if (result.metric != "ibsm" || !result.details.contains("render")) {
+    throw std::invalid_argument("result_view_pairs: not an ibsm result");
+  }
+  const nlohmann::json& d = result.details;
+  const nlohmann::json& render = d.at("render");
+  SplatOptions ref_splats, dist_splats;
+  ref_splats.shape = dist_splats.shape =
+      render.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc : SplatShape::kSquare;
+  if (d.contains("splat_size_reference")) ref_splats.size = d.at("splat_size_reference").get<double>();
+  if (d.contains("splat_size_distorted")) dist_splats.size = d.at("splat_size_distorted").get<double>();
+  const RenderModel a = model_of(reference, ref_splats);
+  const RenderModel b = model_of(distorted, dist_splats);
+  Frame frame;
+  for (int k = 0; k < 3; ++k) frame.center[k] = d.at("bsphere_center").at(k).get<float>();
+  frame.radius = d.at("bsphere_radius").get<float>();
+  RasterOptions ro;
+  ro.resolution = resolution;
+  ro.culling = render.at("culling").get<bool>();
+  ro.lighting = render.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight
+                                                                        : Lighting::kUnlit;
+  std::vector<Float3> dirs;
+  for (const nlohmann::json& v : d.at("views")) {
+    const nlohmann::json& dir = v.at("direction");
+    dirs.push_back({dir.at(0).get<float>(), dir.at(1).get<float>(), dir.at(2).get<float>()});
+  }
+  std::vector<View> va = render_views(a, frame, dirs, ro, threads);
+  std::vector<View> vb = render_views(b, frame, dirs, ro, threads);
+  std::vector<ViewPair> out(dirs.size());
+  for (std::size_t i = 0; i < dirs.size(); ++i) {
+    out[i] = ViewPair{dirs[i], std::move(va[i]), std::move(vb[i])};
+  }
+  return out;
+}
 
 MetricSpec ibsm_spec() {
   MetricSpec s;
@@ -362,12 +444,23 @@ MetricSpec ibsm_spec() {
        "Rotation of the views: polar angle, azimuth, magnitude in degrees, applied when the "
        "magnitude is not 0 (mmetric --ibsmCameraRotation)",
        nlohmann::json::array({0.0, 0.0, 0.0})},
+      {"layout",
+       "Where the cameras are: fibonacci = --views directions on mmetric's Fibonacci sphere; "
+       "cmdm18 = the 18 directions of the CMDM report's image metrics (6 axes + 12 plane "
+       "diagonals)",
+       "fibonacci", {"fibonacci", "cmdm18"}},
       {"no_culling", "Draw back faces too (mmetric --ibsmDisableCulling)", false},
+      {"lighting",
+       "none = the colours themselves (mmetric's); headlight = meshes shaded by a light at the "
+       "camera, colour x (0.4 + 0.6 n.v) (mmetric's lit shader's constants)",
+       "none", {"none", "headlight"}},
       {"no_ssim", "Leave out SSIM and MS-SSIM (faster)", false},
       {"splat_size",
-       "Side of a point cloud's square splats, world units; 0 = 4 x the median nearest-point "
-       "spacing",
+       "Size of a point cloud's splats (diameter or side), world units; 0 = 6 x the median "
+       "nearest-point spacing",
        0.0, {}, 0, 1e300},
+      {"splat_shape", "Shape of a point cloud's splats: disc (of diameter --splat-size) or square",
+       "disc", {"disc", "square"}},
       {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)", ""},
   };
   s.run = run_ibsm;

@@ -35,12 +35,17 @@ float colour_255(double c) { return std::roundf(static_cast<float>(c) * 255.0f);
 
 struct VertexKey {
   Float3 pos;
-  Float3 col;
+  std::array<float, 2> uv{0, 0};
+  Float3 col{0, 0, 0};
 };
-/// mmModel.h CompareVertex: lexicographic on position, then colour (float <, so -0 == +0).
+/// mmModel.h CompareVertex: lexicographic on position, then UV, then colour (float <, so
+/// -0 == +0).
 bool key_less(const VertexKey& a, const VertexKey& b) {
   for (int k = 0; k < 3; ++k) {
     if (a.pos[k] != b.pos[k]) return a.pos[k] < b.pos[k];
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (a.uv[k] != b.uv[k]) return a.uv[k] < b.uv[k];
   }
   for (int k = 0; k < 3; ++k) {
     if (a.col[k] != b.col[k]) return a.col[k] < b.col[k];
@@ -56,28 +61,83 @@ Triangle rotate_to_smallest(Triangle t) {
   return t;
 }
 
-/// The unique vertex keys of the faces' vertices in sorted order (the first of equal keys, in
-/// order of first use, represents them) and each file vertex's rank among them.
-std::vector<VertexKey> sorted_vertices(const std::vector<VertexKey>& keys,
-                                       const std::vector<Triangle>& faces,
-                                       std::vector<std::uint32_t>& rank_of) {
-  std::vector<std::uint32_t> first_use;
-  std::vector<char> seen(keys.size(), 0);
-  for (const Triangle& t : faces) {
-    for (std::uint32_t v : t) {
-      if (!seen[v]) first_use.push_back(v);
-      seen[v] = 1;
-    }
-  }
-  std::stable_sort(first_use.begin(), first_use.end(),
-                   [&](std::uint32_t a, std::uint32_t b) { return key_less(keys[a], keys[b]); });
+/// The unique keys of the faces' corners in sorted order and each corner's rank among them
+/// (mmetric's ModelBuilder then sorted map: equal keys are one vertex).
+std::vector<VertexKey> sorted_vertices(const std::vector<VertexKey>& corner_keys,
+                                       std::vector<std::uint32_t>& rank_of_corner) {
+  std::vector<std::uint32_t> order(corner_keys.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return key_less(corner_keys[a], corner_keys[b]);
+  });
   std::vector<VertexKey> unique;
-  rank_of.assign(keys.size(), 0);
-  for (std::uint32_t v : first_use) {
-    if (unique.empty() || key_less(unique.back(), keys[v])) unique.push_back(keys[v]);
-    rank_of[v] = static_cast<std::uint32_t>(unique.size() - 1);
+  rank_of_corner.assign(corner_keys.size(), 0);
+  for (std::uint32_t c : order) {
+    if (unique.empty() || key_less(unique.back(), corner_keys[c])) unique.push_back(corner_keys[c]);
+    rank_of_corner[c] = static_cast<std::uint32_t>(unique.size() - 1);
   }
   return unique;
+}
+
+Float3 float_position(const Vec3& p) {
+  return {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
+}
+
+/// Unit vertex normals: area-weighted face normals summed (in double), normalised.
+std::vector<Float3> vertex_normals(const std::vector<Float3>& positions,
+                                   const std::vector<Triangle>& triangles) {
+  std::vector<Vec3> sum(positions.size(), Vec3{0, 0, 0});
+  for (const Triangle& t : triangles) {
+    const Float3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
+    const double e1[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+    const double e2[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+    const Vec3 n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                 e1[0] * e2[1] - e1[1] * e2[0]};
+    for (std::uint32_t v : t) {
+      for (int k = 0; k < 3; ++k) sum[v][k] += n[k];
+    }
+  }
+  std::vector<Float3> out(positions.size(), Float3{0, 0, 0});
+  for (std::size_t v = 0; v < sum.size(); ++v) {
+    const Vec3& n = sum[v];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (len > 0) {
+      out[v] = {static_cast<float>(n[0] / len), static_cast<float>(n[1] / len),
+                static_cast<float>(n[2] / len)};
+    }
+  }
+  return out;
+}
+
+/// The canonical model of faces given by their corners' keys (one texture index per face, or
+/// none): mmetric's reorder(..., "oriented"): vertices unique and sorted, each face rotated to
+/// start at its smallest vertex, faces sorted by (corners, texture) and made unique.
+RenderModel canonical_mesh(const std::vector<VertexKey>& corner_keys,
+                           const std::vector<std::uint32_t>& face_texture, bool colours,
+                           bool textured) {
+  std::vector<std::uint32_t> rank;
+  const std::vector<VertexKey> unique = sorted_vertices(corner_keys, rank);
+  RenderModel out;
+  for (const VertexKey& k : unique) {
+    out.positions.push_back(k.pos);
+    if (colours) out.colors_255.push_back(k.col);
+    if (textured) out.uvs.push_back(k.uv);
+  }
+  const std::size_t faces = corner_keys.size() / 3;
+  std::vector<std::array<std::uint32_t, 4>> sorted(faces);
+  for (std::size_t f = 0; f < faces; ++f) {
+    const Triangle t = rotate_to_smallest({rank[3 * f], rank[3 * f + 1], rank[3 * f + 2]});
+    sorted[f] = {t[0], t[1], t[2], face_texture.empty() ? 0u : face_texture[f]};
+  }
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  out.triangles.reserve(sorted.size());
+  for (const auto& f : sorted) {
+    out.triangles.push_back({f[0], f[1], f[2]});
+    if (textured) out.triangle_texture.push_back(f[3]);
+  }
+  out.normals = vertex_normals(out.positions, out.triangles);
+  return out;
 }
 
 }  // namespace
@@ -85,31 +145,38 @@ std::vector<VertexKey> sorted_vertices(const std::vector<VertexKey>& keys,
 RenderModel mesh_model(const ColoredMesh& mesh, bool has_colors) {
   if (mesh.triangles.empty()) throw FormatError("mesh has no faces to render");
   has_colors = has_colors && mesh.colors.size() == mesh.positions.size();
-  std::vector<VertexKey> keys(mesh.positions.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const Vec3& p = mesh.positions[i];
-    keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
-    if (has_colors) {
-      const Rgb& c = mesh.colors[i];
-      keys[i].col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
-    } else {
-      keys[i].col = {0, 0, 0};
+  std::vector<VertexKey> corners;
+  corners.reserve(3 * mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) {
+    for (std::uint32_t v : t) {
+      VertexKey k;
+      k.pos = float_position(mesh.positions[v]);
+      if (has_colors) {
+        const Rgb& c = mesh.colors[v];
+        k.col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
+      }
+      corners.push_back(k);
     }
   }
-  std::vector<std::uint32_t> rank_of;
-  const std::vector<VertexKey> unique = sorted_vertices(keys, mesh.triangles, rank_of);
-  RenderModel out;
-  for (const VertexKey& k : unique) {
-    out.positions.push_back(k.pos);
-    if (has_colors) out.colors_255.push_back(k.col);
+  return canonical_mesh(corners, {}, has_colors, false);
+}
+
+RenderModel textured_mesh_model(const mesh::TexturedMesh& mesh) {
+  const ColoredMesh& m = mesh.file.mesh;
+  if (m.triangles.empty()) throw FormatError("mesh has no faces to render");
+  std::vector<VertexKey> corners;
+  corners.reserve(3 * m.triangles.size());
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      VertexKey key;
+      key.pos = float_position(m.positions[m.triangles[f][k]]);
+      const mesh::Uv& uv = mesh.uvs[mesh.triangle_uvs[f][k]];
+      key.uv = {static_cast<float>(uv[0]), static_cast<float>(uv[1])};
+      corners.push_back(key);
+    }
   }
-  out.triangles.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) {
-    out.triangles.push_back(rotate_to_smallest({rank_of[t[0]], rank_of[t[1]], rank_of[t[2]]}));
-  }
-  std::sort(out.triangles.begin(), out.triangles.end());
-  out.triangles.erase(std::unique(out.triangles.begin(), out.triangles.end()),
-                      out.triangles.end());
+  RenderModel out = canonical_mesh(corners, mesh.triangle_texture, false, true);
+  out.textures = std::make_shared<const std::vector<mesh::TextureImage>>(mesh.textures);
   return out;
 }
 
@@ -184,6 +251,7 @@ RenderModel cloud_model(const ColoredCloud& cloud, const SplatOptions& options) 
     throw FormatError("point cloud: no two distinct points, so no splat size (give one)");
   }
   out.splat_size = static_cast<float>(size);
+  out.splat_shape = options.shape;
   return out;
 }
 
@@ -268,6 +336,7 @@ namespace {
 struct Camera {
   M4 mvp;
   M4 viewport;
+  F3 towards_camera;  ///< unit direction from the frame's centre to the camera
   float depth_range = 0;
   float pixels_per_unit = 0;
 };
@@ -293,6 +362,7 @@ Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
   const M4 model_view = detail::mul(view, detail::identity());
   Camera c;
   c.mvp = detail::mul(detail::mul(proj, glob), model_view);
+  c.towards_camera = dir;
   const F3 far_point = eye - dir * radius * 2.0f;
   c.depth_range = std::abs(detail::mul(c.mvp, F4{far_point.x, far_point.y, far_point.z, 1.0f}).z);
   // viewport(0, 0, w, h) as mmetric builds it: its columns (w/2, 0, w/2, 0), (0, h/2, h/2, 0).
@@ -310,8 +380,7 @@ struct Target {
   float* depth;
 };
 
-void write_pixel(const Target& t, int x, int y, float depth, const float colour[3]) {
-  const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
+void write_pixel(const Target& t, std::size_t i, float depth, const float colour[3]) {
   t.depth[i] = depth;
   for (int c = 0; c < 3; ++c) {
     t.rgba[i * 4 + c] = static_cast<std::uint8_t>(static_cast<int>(std::roundf(colour[c])));
@@ -319,9 +388,52 @@ void write_pixel(const Target& t, int x, int y, float depth, const float colour[
   t.rgba[i * 4 + 3] = 255;
 }
 
+/// GLM's mat3 * vec3 on three corner values: (v0 b0 + v1 b1) + v2 b2, per component.
+F3 interpolate(const F3 v[3], float b0, float b1, float b2) {
+  return {v[0].x * b0 + v[1].x * b1 + v[2].x * b2, v[0].y * b0 + v[1].y * b1 + v[2].y * b2,
+          v[0].z * b0 + v[1].z * b1 + v[2].z * b2};
+}
+
+/// What colours a face's pixels: its corners' colours (ShaderCpv), a texture (ShaderMap) or red
+/// (ShaderRed), optionally lit by the headlight.
+struct FaceShader {
+  const F3* colour = nullptr;                  ///< 3 corner colours, 0..255
+  const mesh::TextureImage* texture = nullptr;
+  F3 uv[3];                                    ///< (u, v, 0) per corner
+  const F3* normal = nullptr;                  ///< 3 corner normals: the headlight is on
+  F3 towards_camera;
+  bool two_sided = false;
+
+  void shade(float b0, float b1, float b2, float out[3]) const {
+    F3 rgb{255, 0, 0};
+    if (texture) {
+      const F3 uv_at = interpolate(uv, b0, b1, b2);
+      const Float3 t = mesh::mm_texture_lookup(*texture, uv_at.x, uv_at.y, true);
+      rgb = {t[0], t[1], t[2]};
+    } else if (colour) {
+      rgb = interpolate(colour, b0, b1, b2);
+    }
+    if (normal) {
+      // mmetric's ShaderMapLight: Iamb + Idiff, clamped to 0..255.
+      const F3 n = detail::normalize(interpolate(normal, b0, b1, b2));
+      float lambert = detail::dot(n, towards_camera);
+      lambert = two_sided ? std::abs(lambert) : std::max(lambert, 0.0f);
+      if (std::isnan(lambert)) lambert = 0;  // a zero normal
+      const F3 ambient = rgb * kAmbient;
+      const F3 diffuse = (rgb * kDiffuse) * lambert;
+      rgb = ambient + diffuse;
+      rgb = {std::clamp(rgb.x, 0.0f, 255.0f), std::clamp(rgb.y, 0.0f, 255.0f),
+             std::clamp(rgb.z, 0.0f, 255.0f)};
+    }
+    out[0] = rgb.x, out[1] = rgb.y, out[2] = rgb.z;
+  }
+  static constexpr float kAmbient = 0.4f;  // mmetric's RendererSw _materialAmbient
+  static constexpr float kDiffuse = 0.6f;  // _materialDiffuse (white light)
+};
+
 /// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
 /// writes each pixel at most once, so the order within a face does not matter).
-void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const Float3* colour) {
+void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceShader& shader) {
   float lo[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
   float hi[2] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
   const float clamp[2] = {static_cast<float>(t.width - 1), static_cast<float>(t.height - 1)};
@@ -350,64 +462,130 @@ void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const Float3*
       if (std::isnan(depth)) continue;
       const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
       if (s0 < 0 || s1 < 0 || s2 < 0 || depth <= t.depth[i]) continue;
-      float rgb[3] = {255, 0, 0};  // ShaderRed
-      if (colour) {
-        for (int c = 0; c < 3; ++c) rgb[c] = colour[0][c] * c0 + colour[1][c] * c1 + colour[2][c] * c2;
-      }
-      write_pixel(t, x, y, depth, rgb);
+      float rgb[3];
+      shader.shade(c0, c1, c2, rgb);
+      write_pixel(t, i, depth, rgb);
     }
   }
 }
 
-void draw_mesh(const Target& t, const RenderModel& m, const Camera& cam, bool culling) {
+void draw_mesh(const Target& t, const RenderModel& m, const Camera& cam,
+               const RasterOptions& options) {
   const bool coloured = !m.colors_255.empty();
-  for (const Triangle& tri : m.triangles) {
+  const bool lit = options.lighting == Lighting::kHeadlight && m.normals.size() == m.positions.size();
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    const Triangle& tri = m.triangles[f];
     F4 clip[3];
     for (int k = 0; k < 3; ++k) {
       const Float3& p = m.positions[tri[k]];
       clip[k] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
     }
-    if (culling) {  // clockwise faces culled (mmetric's default cwCulling)
+    if (options.culling) {  // clockwise faces culled (mmetric's default cwCulling)
       const F3 e1{clip[1].x - clip[0].x, clip[1].y - clip[0].y, clip[1].z - clip[0].z};
       const F3 e2{clip[2].x - clip[0].x, clip[2].y - clip[0].y, clip[2].z - clip[0].z};
       if (detail::cross(e1, e2).z <= 0) continue;
     }
     const F4 pts[3] = {detail::mul(cam.viewport, clip[0]), detail::mul(cam.viewport, clip[1]),
                        detail::mul(cam.viewport, clip[2])};
-    Float3 colour[3];
-    if (coloured) {
-      for (int k = 0; k < 3; ++k) colour[k] = m.colors_255[tri[k]];
+    FaceShader shader;
+    F3 colour[3], normal[3];
+    if (m.is_textured()) {
+      shader.texture = &(*m.textures)[m.triangle_texture[f]];
+      for (int k = 0; k < 3; ++k) shader.uv[k] = {m.uvs[tri[k]][0], m.uvs[tri[k]][1], 0};
+    } else if (coloured) {
+      for (int k = 0; k < 3; ++k) colour[k] = f3(m.colors_255[tri[k]]);
+      shader.colour = colour;
     }
-    draw_face(t, clip, pts, coloured ? colour : nullptr);
+    if (lit) {
+      for (int k = 0; k < 3; ++k) normal[k] = f3(m.normals[tri[k]]);
+      shader.normal = normal;
+      shader.towards_camera = cam.towards_camera;
+      shader.two_sided = !options.culling;
+    }
+    draw_face(t, clip, pts, shader);
   }
 }
 
+/// A point's splat on the screen: its projection, depth and the pixels of its footprint.
+struct Splat {
+  float px, py, depth;
+  int x0, y0, x1, y1;
+};
+
+Splat splat_of(const Float3& p, const Camera& cam, const Target& t, float half_px) {
+  const F4 clip = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
+  const F4 pt = detail::mul(cam.viewport, clip);
+  Splat s;
+  s.px = pt.x / pt.w;
+  s.py = pt.y / pt.w;
+  s.depth = clip.z;
+  s.x0 = static_cast<int>(std::max(0.0f, std::ceil(s.px - half_px)));
+  s.y0 = static_cast<int>(std::max(0.0f, std::ceil(s.py - half_px)));
+  s.x1 = static_cast<int>(std::min(static_cast<float>(t.width - 1), std::floor(s.px + half_px)));
+  s.y1 = static_cast<int>(std::min(static_cast<float>(t.height - 1), std::floor(s.py + half_px)));
+  return s;
+}
+
+/// Calls f(pixel index, squared screen distance to the centre) for each pixel of the footprint.
+template <class F>
+void for_each_pixel(const Splat& s, const Target& t, float half_px, bool disc, F&& f) {
+  for (int y = s.y0; y <= s.y1; ++y) {
+    const float dy = static_cast<float>(y) - s.py;
+    for (int x = s.x0; x <= s.x1; ++x) {
+      const float dx = static_cast<float>(x) - s.px;
+      const float d2 = dx * dx + dy * dy;
+      if (disc && d2 > half_px * half_px) continue;
+      f(static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width, d2);
+    }
+  }
+}
+
+/// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
+/// Botsch et al. 2005): pass 1 finds the nearest depth each footprint reaches; pass 2 colours a
+/// pixel with the point whose centre is nearest to it among the points within one splat size
+/// of that front depth (ties: the first in canonical order). So the back of an object does not
+/// show through the gaps between front splats, and colours are not blocks of splat size.
 void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
   const float half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
+  const bool disc = m.splat_shape == SplatShape::kDisc;
   const bool coloured = !m.colors_255.empty();
-  for (std::size_t i = 0; i < m.positions.size(); ++i) {
-    const Float3& p = m.positions[i];
-    const F4 clip = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
-    const F4 pt = detail::mul(cam.viewport, clip);
-    const float px = pt.x / pt.w, py = pt.y / pt.w;
-    const int x0 = static_cast<int>(std::max(0.0f, std::ceil(px - half_px)));
-    const int y0 = static_cast<int>(std::max(0.0f, std::ceil(py - half_px)));
-    const int x1 = static_cast<int>(std::min(static_cast<float>(t.width - 1), std::floor(px + half_px)));
-    const int y1 = static_cast<int>(std::min(static_cast<float>(t.height - 1), std::floor(py + half_px)));
+  // One splat size in depth units (the frame's diameter spans depth_range).
+  const float epsilon = m.splat_size * cam.depth_range * cam.pixels_per_unit /
+                        static_cast<float>(t.width);
+  std::vector<Splat> splats(m.positions.size());
+  for (std::size_t i = 0; i < splats.size(); ++i) {
+    splats[i] = splat_of(m.positions[i], cam, t, half_px);
+    const float z = splats[i].depth;
+    for_each_pixel(splats[i], t, half_px, disc, [&](std::size_t k, float) {
+      if (z > t.depth[k]) t.depth[k] = z;
+    });
+  }
+  const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.height);
+  std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
+  std::vector<float> depth(n, -FLT_MAX);
+  for (std::size_t i = 0; i < splats.size(); ++i) {
+    const Splat& s = splats[i];
     const float rgb[3] = {coloured ? m.colors_255[i][0] : 255.0f,
                           coloured ? m.colors_255[i][1] : 0.0f,
                           coloured ? m.colors_255[i][2] : 0.0f};
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        const std::size_t k = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
-        if (clip.z <= t.depth[k]) continue;
-        write_pixel(t, x, y, clip.z, rgb);
-      }
-    }
+    for_each_pixel(s, t, half_px, disc, [&](std::size_t k, float d2) {
+      if (s.depth < t.depth[k] - epsilon || !(d2 < nearest[k])) return;
+      nearest[k] = d2;
+      write_pixel(t, k, s.depth, rgb);
+      depth[k] = s.depth;
+    });
   }
+  std::copy(depth.begin(), depth.end(), t.depth);
 }
 
 }  // namespace
+
+std::vector<Float3> cmdm18_directions() {
+  const float d = static_cast<float>(1 / std::sqrt(2.0));
+  return {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0},  {0, 0, 1},  {0, 0, -1},
+          {d, d, 0},  {d, -d, 0}, {-d, d, 0}, {-d, -d, 0}, {d, 0, d},  {d, 0, -d},
+          {-d, 0, d}, {-d, 0, -d}, {0, d, d}, {0, d, -d},  {0, -d, d}, {0, -d, -d}};
+}
 
 View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
                  const RasterOptions& options) {
@@ -426,7 +604,7 @@ View render_view(const RenderModel& model, const Frame& frame, const Float3& dir
   if (model.is_cloud()) {
     draw_splats(t, model, cam);
   } else {
-    draw_mesh(t, model, cam, options.culling);
+    draw_mesh(t, model, cam, options);
   }
   return v;
 }

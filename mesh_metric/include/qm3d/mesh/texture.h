@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/types.h"
 #include "qm3d/mesh/mesh_io.h"
 
@@ -38,6 +39,12 @@ TextureImage read_texture(const std::filesystem::path& path);
 
 /// Bilinear, wrapping lookup of `image` at `uv` (conventions above).
 Rgb sample_texture(const TextureImage& image, const Uv& uv);
+
+/// mmetric 1.1.7's lookup of `image` at float (u, v) (mmImage.h texture2D / texture2D_bilinear):
+/// nearest (texel floor(u W), floor(v H)) or bilinear between the four nearest texel centres,
+/// edges clamped (no wrap), v = 0 the bottom row; channels 0..255, each texel roundf(c * 255).
+/// What its grid sampling and its software renderer colour with.
+Float3 mm_texture_lookup(const TextureImage& image, float u, float v, bool bilinear);
 
 /// A mesh whose colours come from textures.
 struct TexturedMesh {

@@ -31,11 +31,19 @@ constexpr double kPsnrClip = 99.99;
 /// The named values of an IBSM result, in order (the JSON `features`).
 const std::vector<std::string>& ibsm_value_names();
 
+/// Where the cameras are.
+enum class ViewLayout {
+  kFibonacci,  ///< `views` directions on mmetric's Fibonacci sphere, rotated by rotation_deg
+  kCmdm18,     ///< the 18 directions of the CMDM report's protocol (raster.h cmdm18_directions)
+};
+
 struct IbsmOptions : RunOptions {
-  int views = 16;          ///< --ibsmCameraCount
+  ViewLayout layout = ViewLayout::kFibonacci;
+  int views = 16;          ///< --ibsmCameraCount (Fibonacci layout)
   int resolution = 2048;   ///< --ibsmResolution (width = height)
   Float3 rotation_deg{0, 0, 0};  ///< --ibsmCameraRotation: polar, azimuth, magnitude (degrees)
   bool culling = true;     ///< false = --ibsmDisableCulling
+  Lighting lighting = Lighting::kUnlit;  ///< unlit = mmetric's
   bool image_quality = true;  ///< compute SSIM and MS-SSIM (the slowest part)
   SplatOptions splats;     ///< how clouds are drawn
   /// When not empty: each view of both objects written there as PNG (view_NN_reference.png,
@@ -55,13 +63,33 @@ struct IbsmView {
   bool left_out = false;          ///< an image is empty
 };
 
+/// The view directions of `options` (its layout, count and rotation).
+std::vector<Float3> view_directions(const IbsmOptions& options);
+
+/// The options of an ibsm run from the registry's option values (all filled; ibsm_spec()).
+IbsmOptions ibsm_options(const OptionValues& values, const RunOptions& run = {});
+
 /// Compares two prepared models. NumericError when no view has pixels both images cover.
 MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& distorted,
                           const IbsmOptions& options, const std::string& reference_name = "reference",
                           const std::string& distorted_name = "distorted");
 
-/// The model of an input: its mesh (raster.h mesh_model) or, for a cloud, its points as splats.
+/// The model of an input: a textured OBJ with its textures (textured_mesh_model), another mesh
+/// with its vertex colours (mesh_model) or, for a cloud, its points as splats (cloud_model).
 RenderModel model_of(const Input& input, const SplatOptions& splats = {});
+
+/// A view as a PNG file's bytes (RGBA, 8 bits, top row first, alpha 0 where nothing is drawn).
+std::vector<std::uint8_t> png_bytes(const View& view);
+
+/// The view pairs of an ibsm result (its cameras, frame, culling, lighting and splat sizes, from
+/// result.details) rendered again from `reference` and `distorted` at `resolution` pixels, for
+/// display (the HTML report). std::invalid_argument when `result` is not an ibsm result.
+struct ViewPair {
+  Float3 direction{0, 0, 0};
+  View reference, distorted;
+};
+std::vector<ViewPair> result_view_pairs(const MetricResult& result, const Input& reference,
+                                        const Input& distorted, int resolution, int threads = 0);
 
 /// The views of one object as compute_ibsm renders them (framed on `frame`; the frame of the
 /// object alone is frame_of(model, model)), rendered with `threads` threads (0 = OpenMP's
