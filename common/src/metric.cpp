@@ -385,6 +385,12 @@ Input::Kind MetricSpec::reads_for(const Input& reference, const Input& distorted
   return reads;
 }
 
+Input::Kind MetricSpec::reads_input(const Input& input, const Input& reference,
+                                    const Input& distorted) const {
+  if (reads_each_as_is) return input.kind();
+  return reads_for(reference, distorted);
+}
+
 namespace {
 
 std::string value_text(const nlohmann::json& v) { return v.dump(); }
@@ -531,8 +537,12 @@ OptionValues options_for(const MetricSpec& spec, const OptionValues& all) {
 namespace {
 
 // Both inputs' cloud reader warnings, each line once (the same file may be both).
-std::vector<std::string> cloud_reader_warnings(const Input& reference, const Input& distorted) {
-  std::vector<std::string> all = reference.cloud_warnings();
+/// The cloud readers' warnings of the inputs read as clouds (once each).
+std::vector<std::string> cloud_reader_warnings(const Input& reference, bool reference_is_cloud,
+                                               const Input& distorted, bool distorted_is_cloud) {
+  std::vector<std::string> all;
+  if (reference_is_cloud) all = reference.cloud_warnings();
+  if (!distorted_is_cloud) return all;
   for (std::string& w : distorted.cloud_warnings()) {
     if (std::find(all.begin(), all.end(), w) == all.end()) all.push_back(std::move(w));
   }
@@ -669,19 +679,20 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
   check_thread_count(run.threads);
   check_model(run);
   // Both inputs are read concurrently unless one thread was asked for.
-  const Input::Kind reads = spec.reads_for(reference, distorted);
+  const Input::Kind ref_reads = spec.reads_input(reference, reference, distorted);
+  const Input::Kind dist_reads = spec.reads_input(distorted, reference, distorted);
   auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
-                             [&] { reference.load(reads); });
-  distorted.load(reads);
+                             [&] { reference.load(ref_reads); });
+  distorted.load(dist_reads);
   ref_task.get();
   // Taken now: the metric may release the inputs (RunOptions::inputs_done).
-  const std::vector<std::string> reading = reads == Input::Kind::kCloud
-                                               ? cloud_reader_warnings(reference, distorted)
-                                               : std::vector<std::string>();
+  const std::vector<std::string> reading =
+      cloud_reader_warnings(reference, ref_reads == Input::Kind::kCloud, distorted,
+                            dist_reads == Input::Kind::kCloud);
   MetricResult result;
   try {
-    check_coordinate_range(positions_of(reference, reads), reference.name());
-    check_coordinate_range(positions_of(distorted, reads), distorted.name());
+    check_coordinate_range(positions_of(reference, ref_reads), reference.name());
+    check_coordinate_range(positions_of(distorted, dist_reads), distorted.name());
     result = spec.run(spec, reference, distorted, run, values);
     check_finite_result(spec, result);
   } catch (const NumericError& e) {

@@ -47,7 +47,7 @@ FormatError = _qm3d.FormatError
 NumericError = _qm3d.NumericError
 """Well-formed input the metric cannot score, e.g. a zero-size bounding box (a ValueError)."""
 
-__all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample",
+__all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample", "render",
            "read_mesh", "read_cloud", "evaluate", "load_model", "Result", "Direction",
            "InputError", "FormatError", "NumericError"]
 
@@ -338,7 +338,9 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     reads = spec["reads"]
     if spec["reads_two_meshes_as_meshes"] and ref_inputs.kind == dist_inputs.kind == "mesh":
         reads = "mesh"  # the metric dispatches on the pair (dlab: meshes by projection)
-    result = _qm3d.run(name, ref_inputs.get(reads), dist_inputs.get(reads),
+    ref_reads = ref_inputs.kind if spec["reads_each_as_is"] else reads
+    dist_reads = dist_inputs.kind if spec["reads_each_as_is"] else reads
+    result = _qm3d.run(name, ref_inputs.get(ref_reads), dist_inputs.get(dist_reads),
                        _json.dumps(options), run["direction"], _thread_count(run["threads"]),
                        bool(run["per_element"]),
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
@@ -535,6 +537,50 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
     inputs = _Inputs(mesh, "mesh")
     p, c = _qm3d.sample(inputs.get("mesh"), int(points or 0), float(density or 0), int(seed))
     return {"positions": p, "colors": c}
+
+
+def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="fibonacci",
+           culling=True, lighting="none", splat_size=0.0, splat_shape="disc", frame=None,
+           threads=0, colour_scale="auto"):
+    """Renders an object as ``qm3d ibsm`` sees it: orthographic views from the same cameras,
+    with the same rasteriser (mmetric's sw_raster for meshes, splats for clouds).
+
+    Args:
+        obj: a mesh or point cloud: a file path, (positions, colors[, faces]) arrays or a dict
+            of them, or an Open3D PointCloud / TriangleMesh (as the metric functions take).
+        views, resolution, rotation, layout, lighting, splat_size, splat_shape: as ``ibsm``'s
+            options (``views`` is the Fibonacci layout's count; ``layout="cmdm18"`` gives the
+            CMDM report's 18 directions).
+        culling: back-face culling (ibsm's ``no_culling`` inverted).
+        frame: (centre x, y, z, radius) of the bounding sphere the cameras are framed on, e.g.
+            ``result.to_dict()["bsphere_center"] + [result.to_dict()["bsphere_radius"]]`` of an
+            ibsm result to get its images exactly; None = the object's own (its box's centre and
+            half diagonal + 1 %).
+        threads: OpenMP threads (0 = all cores); the images do not depend on it.
+
+    Returns:
+        dict: ``views``, a list (one per view) of dicts with ``direction`` (3 floats, from the
+        centre towards the camera), ``rgb`` (H, W, 3) uint8, ``mask`` (H, W) bool (drawn
+        pixels), ``depth`` (H, W) float32 (larger = nearer; NaN where nothing is drawn) and
+        ``depth_range`` (the frame's depth span, ibsm's depth scale), rows top first; and
+        ``frame`` (centre, radius).
+    """
+    spec = _SPECS["ibsm"]
+    given = {"views": views, "resolution": resolution, "rotation": list(rotation),
+             "layout": layout, "no_culling": not culling, "lighting": lighting,
+             "splat_size": splat_size, "splat_shape": splat_shape}
+    by_name = {o["name"]: o for o in spec["options"]}
+    options = {k: _option_value(spec, by_name[k], v) for k, v in given.items()}
+    if frame is not None:
+        frame = [_finite("frame", v) for v in frame]
+    inputs = _Inputs(obj, "obj", colour_scale)
+    out, centre, radius = _qm3d.render_views(inputs.any(), _json.dumps(options),
+                                             frame, _thread_count(threads))
+    result = []
+    for direction, rgba, depth, depth_range in out:
+        result.append({"direction": list(direction), "rgb": rgba[:, :, :3].copy(),
+                       "mask": rgba[:, :, 3] != 0, "depth": depth, "depth_range": depth_range})
+    return {"views": result, "frame": {"center": list(centre), "radius": radius}}
 
 
 def _finite(name, a):

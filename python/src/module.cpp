@@ -10,6 +10,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -175,6 +177,7 @@ py::dict spec_dict(const MetricSpec& s) {
                                                          : "both";
   d["reads"] = s.reads == Input::Kind::kMesh ? "mesh" : "cloud";
   d["reads_two_meshes_as_meshes"] = s.reads_two_meshes_as_meshes;
+  d["reads_each_as_is"] = s.reads_each_as_is;
   d["default_direction"] = direction_name(s.default_direction);
   d["direction_help"] = s.direction_help;
   d["takes_model"] = s.takes_model;
@@ -441,6 +444,58 @@ PYBIND11_MODULE(_qm3d, m) {
       },
       py::arg("mesh"), py::arg("grid_size"), py::arg("box"), py::arg("all_axes"),
       py::arg("bilinear"));
+
+  m.def(
+      "render_views",
+      [](const Input& input, const std::string& options_json, std::optional<std::vector<double>> frame,
+         int threads) {
+        const MetricSpec& spec = registry().get("ibsm");
+        const render::IbsmOptions o =
+            render::ibsm_options(spec.complete(nlohmann::json::parse(options_json)));
+        std::vector<render::View> views;
+        render::Frame f;
+        std::vector<render::Float3> dirs;
+        {
+          py::gil_scoped_release release;
+          const render::RenderModel model = render::model_of(input, o.splats);
+          if (frame) {
+            if (frame->size() != 4 || !(std::isfinite((*frame)[3]) && (*frame)[3] > 0)) {
+              throw std::invalid_argument("frame: (centre x, y, z, radius > 0)");
+            }
+            for (int k = 0; k < 3; ++k) f.center[k] = static_cast<float>((*frame)[k]);
+            f.radius = static_cast<float>((*frame)[3]);
+          } else {
+            f = render::frame_of(model, model);
+          }
+          if (o.layout == render::ViewLayout::kCmdm18 && o.views != 16) {
+            throw std::invalid_argument("views: applies to the fibonacci layout (cmdm18 has 18)");
+          }
+          dirs = render::view_directions(o);
+          views = render::render_views(model, f, dirs, {o.resolution, o.culling, o.lighting},
+                                       threads);
+        }
+        py::list out;
+        for (std::size_t i = 0; i < views.size(); ++i) {
+          const render::View& v = views[i];
+          const py::ssize_t h = v.height, w = v.width;
+          py::array_t<std::uint8_t> rgba({h, w, py::ssize_t{4}});
+          py::array_t<float> depth({h, w});
+          auto px = rgba.mutable_unchecked<3>();
+          auto dz = depth.mutable_unchecked<2>();
+          for (py::ssize_t y = 0; y < h; ++y) {
+            const std::size_t row = static_cast<std::size_t>(h - 1 - y) * v.width;  // top first
+            for (py::ssize_t x = 0; x < w; ++x) {
+              const std::size_t k = row + static_cast<std::size_t>(x);
+              for (int c = 0; c < 4; ++c) px(y, x, c) = v.rgba[k * 4 + c];
+              dz(y, x) = v.rgba[k * 4 + 3] ? v.depth[k] : std::numeric_limits<float>::quiet_NaN();
+            }
+          }
+          out.append(py::make_tuple(std::vector<float>(dirs[i].begin(), dirs[i].end()), rgba,
+                                    depth, v.depth_range));
+        }
+        return py::make_tuple(out, std::vector<float>(f.center.begin(), f.center.end()), f.radius);
+      },
+      py::arg("input"), py::arg("options_json"), py::arg("frame"), py::arg("threads"));
 
   m.def(
       "evaluate",

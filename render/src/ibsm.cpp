@@ -331,8 +331,21 @@ MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, co
   const IbsmOptions o = ibsm_options(v, run);
   const RenderModel a = model_of(ref, o.splats);
   const RenderModel b = model_of(dist, o.splats);
+  // The mesh readers' repairs (the cloud readers' are added by run_metric).
+  std::vector<std::string> warnings;
+  for (const Input* in : {&ref, &dist}) {
+    if (in->is_mesh()) {
+      const auto& w = in->mesh().warnings;
+      warnings.insert(warnings.end(), w.begin(), w.end());
+    }
+  }
   if (run.inputs_done) run.inputs_done();
-  return compute_ibsm(a, b, o, ref.name(), dist.name());
+  MetricResult r = compute_ibsm(a, b, o, ref.name(), dist.name());
+  warnings.insert(warnings.end(), r.warnings.begin(), r.warnings.end());
+  r.warnings = std::move(warnings);
+  r.provenance.options = v;
+  r.provenance.options.erase("save_views");
+  return r;
 }
 
 }  // namespace
@@ -426,6 +439,7 @@ MetricSpec ibsm_spec() {
   s.applies_to = AppliesTo::kBoth;
   s.reads = Input::Kind::kCloud;
   s.reads_two_meshes_as_meshes = true;
+  s.reads_each_as_is = true;
   s.default_direction = Direction::kSymmetric;
   s.direction_help = "one comparison of the two images of each view (both directions are the same)";
   s.symmetric_rule = "the same image comparison";

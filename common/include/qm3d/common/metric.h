@@ -188,6 +188,12 @@ struct MetricSpec {
   /// With reads = kCloud: a pair of two meshes is read as meshes (the metric dispatches on the
   /// pair, as D_LAB does: CMDM's projection for two meshes, PCQM's nearest neighbour otherwise).
   bool reads_two_meshes_as_meshes = false;
+  /// Each input is read as what it is, a mesh as a mesh and a cloud as a cloud, also in a mixed
+  /// pair (ibsm renders each as it is). With it, reads_for says kMesh for two meshes only.
+  bool reads_each_as_is = false;
+  /// How `input` is read: as reads_for(pair), or its own kind when reads_each_as_is.
+  Input::Kind reads_input(const Input& input, const Input& reference,
+                          const Input& distorted) const;
   Direction default_direction = Direction::kSymmetric;
   std::string direction_help;  ///< what the directions mean for this metric
   /// How the symmetric score is made of the two directions' (as the report says it).
