@@ -541,24 +541,30 @@ void for_each_pixel(const Splat& s, const Target& t, float half_px, bool disc, F
 }
 
 /// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
-/// Botsch et al. 2005): pass 1 finds the nearest depth each footprint reaches; pass 2 colours a
-/// pixel with the point whose centre is nearest to it among the points within one splat size
-/// of that front depth (ties: the first in canonical order). So the back of an object does not
-/// show through the gaps between front splats, and colours are not blocks of splat size.
+/// Botsch et al. 2005): pass 1 finds the nearest depth that footprints of twice the splat size
+/// reach; pass 2 colours a pixel with the point whose centre is nearest to it among the points
+/// within two splat sizes of that front depth (ties: the first in canonical order; two sizes
+/// let a surface tilted up to about 60 degrees through). So the back
+/// of an object does not show through the gaps between front splats (a gap stays empty), and
+/// colours are not blocks of splat size.
 void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
   const float half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
   const bool disc = m.splat_shape == SplatShape::kDisc;
   const bool coloured = !m.colors_255.empty();
-  // One splat size in depth units (the frame's diameter spans depth_range).
-  const float epsilon = m.splat_size * cam.depth_range * cam.pixels_per_unit /
+  // Two splat sizes in depth units (the frame's diameter spans depth_range).
+  const float epsilon = 2 * m.splat_size * cam.depth_range * cam.pixels_per_unit /
                         static_cast<float>(t.width);
+  // Pass 1 with footprints twice as wide: a gap between the front's splats (where no point
+  // landed) still gets the front's depth, so that the back does not fill it.
+  const float visibility_half_px = 2 * half_px;
   std::vector<Splat> splats(m.positions.size());
   for (std::size_t i = 0; i < splats.size(); ++i) {
-    splats[i] = splat_of(m.positions[i], cam, t, half_px);
-    const float z = splats[i].depth;
-    for_each_pixel(splats[i], t, half_px, disc, [&](std::size_t k, float) {
+    const Splat wide = splat_of(m.positions[i], cam, t, visibility_half_px);
+    const float z = wide.depth;
+    for_each_pixel(wide, t, visibility_half_px, disc, [&](std::size_t k, float) {
       if (z > t.depth[k]) t.depth[k] = z;
     });
+    splats[i] = splat_of(m.positions[i], cam, t, half_px);
   }
   const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.height);
   std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
