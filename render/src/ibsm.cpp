@@ -250,7 +250,14 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
                           const std::string& distorted_name) {
   const auto start = std::chrono::steady_clock::now();
   check_options(options);
-  if (!options.save_views.empty()) std::filesystem::create_directories(options.save_views);
+  if (!options.save_views.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(options.save_views, error);
+    if (error || !std::filesystem::is_directory(options.save_views)) {
+      throw InputError(options.save_views.string() + ": cannot create the views' directory" +
+                       (error ? " (" + error.message() + ")" : ""));
+    }
+  }
   const Frame frame = frame_of(reference, distorted);
   const std::vector<Float3> dirs = view_directions(options);
   const std::vector<IbsmView> views = compare_all_views(reference, distorted, frame, dirs, options);
