@@ -19,6 +19,7 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
+#include "qm3d/render/ibsm.h"
 #include "report_templates.h"  // generated from report_template.html / report_index_template.html
 
 #ifndef QM3D_THREE_JS_DEFAULT
@@ -289,13 +290,49 @@ json metrics_json(const std::vector<ReportEntry>& entries) {
   for (const ReportEntry& e : entries) {
     json m = to_json(*e.result);
     m["title"] = e.spec->title;
-    m["feature_names"] = e.result->feature_names;
+    // f1..f8 metrics name their features; the others (psnr, ibsm) their named values.
+    json names = e.result->feature_names;
+    if (e.result->feature_names.empty()) {
+      for (const auto& [name, value] : e.result->values) names.push_back(name);
+    }
+    m["feature_names"] = names;
     m["per_element_on_input"] = e.spec->per_element_on_input;
     m["higher_is_better"] = e.spec->higher_is_better;
     m["symmetric_rule"] = e.spec->symmetric_rule;
     metrics.push_back(std::move(m));
   }
   return metrics;
+}
+
+/// The view pairs of the image metrics that ran (ibsm), rendered again at up to
+/// kReportViewPixels for the page, as base64 PNG.
+json rendered_views_json(const std::vector<ReportEntry>& entries, const Input& ref,
+                         const Input& dist) {
+  json sets = json::array();
+  for (const ReportEntry& e : entries) {
+    if (e.spec->name != "ibsm" || !e.result->details.contains("render")) continue;
+    const int scored = e.result->details.at("render").at("resolution").get<int>();
+    const int shown = std::min(scored, kReportViewPixels);
+    const std::vector<render::ViewPair> pairs = render::result_view_pairs(*e.result, ref, dist, shown);
+    json views = json::array();
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      const json& scored_view = e.result->details.at("views").at(i);
+      const std::vector<std::uint8_t> a = render::png_bytes(pairs[i].reference);
+      const std::vector<std::uint8_t> b = render::png_bytes(pairs[i].distorted);
+      views.push_back({{"direction", scored_view.at("direction")},
+                       {"left_out", scored_view.at("left_out")},
+                       {"yuv_psnr", scored_view.at("yuv_psnr")},
+                       {"ssim", scored_view.at("ssim")},
+                       {"reference", base64(a.data(), a.size())},
+                       {"distorted", base64(b.data(), b.size())}});
+    }
+    sets.push_back({{"metric", e.spec->name},
+                    {"title", e.spec->title},
+                    {"resolution", shown},
+                    {"scored_resolution", scored},
+                    {"views", views}});
+  }
+  return sets;
 }
 
 json report_json(const std::vector<ReportEntry>& entries, const Input& ref, const Input& dist,
@@ -318,6 +355,7 @@ json report_json(const std::vector<ReportEntry>& entries, const Input& ref, cons
             {"notes", notes},
             {"colormap", "blue-cyan-green-yellow-red (as the --map PLY's colours)"}};
   j["range"] = settings.fixed_range ? json(*settings.fixed_range) : json(nullptr);
+  j["rendered_views"] = rendered_views_json(entries, ref, dist);
   return j;
 }
 

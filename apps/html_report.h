@@ -33,6 +33,9 @@ constexpr std::size_t kTopRegions = 10;
 constexpr double kRegionRadiusRel = 0.05;
 /// Bins of the local-distortion histogram.
 constexpr std::size_t kHistogramBins = 64;
+/// Largest side of the rendered views an image metric's section shows (re-rendered from the
+/// result's cameras: 16 pairs of 384² PNGs are about 1-2 MB).
+constexpr int kReportViewPixels = 384;
 
 /// How a report is drawn.
 struct ReportSettings {

@@ -226,7 +226,8 @@ int run(int argc, char** argv) {
       {nullptr, app.add_subcommand("compare",
                                    "Every metric that applies: CMDM, MSDM2, PCQM on the vertices "
                                    "and PCQM on surface samples (pcqm_sampled; both meshes "
-                                   "sampled alike) for two meshes, PCQM for two clouds")});
+                                   "sampled alike), D_LAB for two meshes, PCQM, PSNR and D_LAB for "
+                                   "two clouds (ibsm, seconds of rendering per pair, only by name)")});
   score_commands.push_back(
       {nullptr,
        app.add_subcommand("report",

@@ -507,7 +507,7 @@ std::vector<const MetricSpec*> Registry::applicable(const Input& reference,
                                                     const Input& distorted) const {
   std::vector<const MetricSpec*> out;
   for (const auto& m : metrics_) {
-    if (m.applies(reference, distorted)) out.push_back(&m);
+    if (m.in_compare && m.applies(reference, distorted)) out.push_back(&m);
   }
   return out;
 }

@@ -424,7 +424,8 @@ for _name, _spec in _SPECS.items():
 def compare(reference, distorted, **options):
     """Every metric that applies to the pair (as ``qm3d compare``), in the registry's order:
     CMDM, MSDM2, PCQM, pcqm_sampled and D_LAB for two meshes; PCQM, PSNR and D_LAB for two
-    clouds; PCQM and D_LAB for a mesh and a cloud. Keyword arguments go to every metric that has
+    clouds; PCQM and D_LAB for a mesh and a cloud (ibsm only by name: ``qm3d.ibsm``). Keyword
+    arguments go to every metric that has
     them (e.g. scales=, radius=, points=); run options (direction, threads, per_element,
     data_dir, progress) to all; ``model`` (a file) applies to the metric it names.
 

@@ -447,6 +447,7 @@ MetricSpec ibsm_spec() {
   s.reads = Input::Kind::kCloud;
   s.reads_two_meshes_as_meshes = true;
   s.reads_each_as_is = true;
+  s.in_compare = false;  // 2 x 16 views of 2048² and SSIM: asked for by name
   s.default_direction = Direction::kSymmetric;
   s.direction_help = "one comparison of the two images of each view (both directions are the same)";
   s.symmetric_rule = "the same image comparison";

@@ -191,6 +191,9 @@ struct MetricSpec {
   /// Each input is read as what it is, a mesh as a mesh and a cloud as a cloud, also in a mixed
   /// pair (ibsm renders each as it is). With it, reads_for says kMesh for two meshes only.
   bool reads_each_as_is = false;
+  /// Run by `compare` (and `report`, `demo`, batch's compare rows) when it applies; false: only
+  /// when asked for by name (ibsm: seconds of rendering per pair, a different family of metric).
+  bool in_compare = true;
   /// How `input` is read: as reads_for(pair), or its own kind when reads_each_as_is.
   Input::Kind reads_input(const Input& input, const Input& reference,
                           const Input& distorted) const;
@@ -241,7 +244,8 @@ class Registry {
   const MetricSpec& get(const std::string& name) const;
   /// Every metric, in registration order.
   const std::vector<MetricSpec>& metrics() const { return metrics_; }
-  /// The metrics that apply to the pair, in registration order (what `compare` runs).
+  /// The metrics that apply to the pair and run in `compare` (MetricSpec::in_compare), in
+  /// registration order.
   std::vector<const MetricSpec*> applicable(const Input& reference, const Input& distorted) const;
   /// Whether a higher number in a score column named `column` is better, and why: a column
   /// named after a registered metric ("psnr": true) or after one of a metric's named values
