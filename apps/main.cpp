@@ -206,7 +206,7 @@ std::string orientation_line() {
 int run(int argc, char** argv) {
   CLI::App app{"qm3d " + std::string(kVersion) +
                " - visual quality metrics for coloured 3D content: CMDM and MSDM2 for meshes, "
-               "PCQM for coloured point clouds, MPEG pc_error's PSNR.\n" +
+               "PCQM for coloured point clouds, MPEG pc_error's PSNR and mmetric's IBSM (image-based, on rendered views).\n" +
                orientation_line() +
                " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
                "mesh."};

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -26,6 +26,11 @@
 #            (built outside this repository), mm samples both meshes on the same box and
 #            compares them (it compares on one thread) in the same loop, interleaved; target:
 #            qm3d's wall <= 1/4 of mm's, peak RSS <= mm's (reported, not enforced).
+#   ibsm     `ibsm --threads 2` with its defaults (16 views of 2048², SSIM and MS-SSIM) on the
+#            monkey pair, blob7's pair and the 1M-point sphere pair; when QM3D_MMETRIC is set,
+#            mm's `compare --mode ibsm` (one thread, no SSIM) runs on the two mesh pairs in the
+#            same loop, interleaved, and qm3d's YUV PSNR must equal the one mm prints. Targets:
+#            wall <= mm's on meshes, the cloud pair <= 10 s (reported, not enforced).
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
 #            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
@@ -413,6 +418,63 @@ EOF
       "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$(head -1 "$TMP/dm")"
     wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
     summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 0.25)")
+  done
+  echo
+  for line in "${summary[@]}"; do echo "$line"; done
+fi
+
+if [ "$WHICH" = all ] || [ "$WHICH" = ibsm ]; then
+  gen_mesh 7; gen_cloud 1000000 1000k
+  MM="${QM3D_MMETRIC:-}"
+  [ -z "$MM" ] || [ -x "$MM" ] || { echo "QM3D_MMETRIC=$MM is not executable" >&2; exit 1; }
+  REFDATA="$ROOT/../shared/data/reference"
+  # mm reads no OFF: blob7's pair as the ASCII PLY copies the psnr_mesh mode writes.
+  B7=off; [ -f "$DATA/blob7_ref.ply" ] && [ -f "$DATA/blob7_bothnoise.ply" ] && B7=ply
+  [ -z "$MM" ] || [ "$B7" = ply ] || {
+    echo "run 'bench/run_benchmarks.sh psnr_mesh' once first (it writes $DATA/blob7_*.ply for mm)" >&2; exit 1; }
+  echo
+  echo "| case | tool | threads | wall | CPU | peak RSS | YUV PSNR (dB) | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  summary=()
+  for c in "monkey2 / monkey_simplified (mesh)|$REFDATA/cmdm/monkey2.obj|$REFDATA/cmdm/monkey_simplified.obj|mesh" \
+           "blob7 ref / bothnoise (mesh, 164k vertices)|$DATA/blob7_ref.$B7|$DATA/blob7_bothnoise.$B7|mesh" \
+           "sphere 1M points ref / cnoise10 (cloud)|$DATA/sphere_1000k_ref_bin.ply|$DATA/sphere_1000k_cnoise10_bin.ply|cloud"; do
+    IFS='|' read -r label ref dist kind <<<"$c"
+    for f in tq tm sq sm; do : > "$TMP/$f"; done
+    # qm3d and mm alternate, so that a slow spell of the machine weighs on both alike.
+    for _ in $(seq "$RUNS"); do
+      measure_once "$TMP/tq" "$QM3D" ibsm "$ref" "$dist" --threads 2 --quiet --json
+      $PY -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['features']['yuv_psnr']))" "$TMP/out" >> "$TMP/sq" 2>/dev/null || echo error >> "$TMP/sq"
+      if [ -n "$MM" ] && [ "$kind" = mesh ]; then
+        measure_once "$TMP/tm" "$MM" compare --mode ibsm --inputModelA "$ref" --inputModelB "$dist"
+        awk '/^YUV PSNR =/ {v = $NF} END {print v == "" ? "error" : v}' "$TMP/out" >> "$TMP/sm"
+      fi
+    done
+    s=$(head -1 "$TMP/sq")
+    if [ "$(sort -u "$TMP/sq" | wc -l)" != 1 ] || [ "$s" = error ]; then
+      echo "FAIL: $label: qm3d's YUV PSNR differs between runs or is missing" >&2
+      STATUS=1
+    fi
+    target="wall <= mm's"
+    [ "$kind" = cloud ] && target="<= 10 s (mm draws no cloud)"
+    [ "$kind" = mesh ] && [ -z "$MM" ] && target="(QM3D_MMETRIC unset: no mm to compare)"
+    printf '| %s | qm3d (with SSIM, MS-SSIM) | 2 | %s s | %s s | %s MB | %s | %s |\n' "$label" \
+      "$(stats "$TMP/tq" 0)" "$(stats "$TMP/tq" 1)" "$(stats "$TMP/tq" 2 1024)" "$s" "$target"
+    if [ "$kind" = cloud ]; then
+      wq=$(median "$TMP/tq" 0)
+      summary+=("$label: qm3d wall $wq s (target <= 10 s)")
+    fi
+    [ -s "$TMP/tm" ] || continue
+    sm=$(head -1 "$TMP/sm")
+    printf '| %s | mm compare --mode ibsm | 1 | %s s | %s s | %s MB | %s | |\n' "$label" \
+      "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$sm"
+    wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
+    summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 1)")
+    if $PY -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(0 if abs(a - b) <= 5e-7 * abs(b) + 5e-7 else 1)" "$s" "$sm"; then
+      summary+=("ok: $label: qm3d's YUV PSNR $s rounds to mm's $sm")
+    else
+      summary+=("FAIL: $label: qm3d's YUV PSNR $s, mm printed $sm"); STATUS=1
+    fi
   done
   echo
   for line in "${summary[@]}"; do echo "$line"; done

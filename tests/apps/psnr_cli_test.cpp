@@ -82,7 +82,7 @@ TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
   EXPECT_NE(help.out.find("Distortions (0 = identical, larger is worse): CMDM, MSDM2, PCQM"),
             std::string::npos)
       << help.out;
-  EXPECT_NE(help.out.find("qualities (higher is better, inf = identical): PSNR."),
+  EXPECT_NE(help.out.find("qualities (higher is better, inf = identical): PSNR, IBSM."),
             std::string::npos)
       << help.out;
   EXPECT_EQ(help.out.find("Scores are distortions"), std::string::npos) << help.out;
