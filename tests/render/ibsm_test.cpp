@@ -59,7 +59,7 @@ TEST(Ibsm, AMeshAgainstItsOwnDenseSamplesScoresHigh) {
   const RenderModel mesh = mesh_model(m);
   const RenderModel cloud = cloud_model(mesh::sample_surface(m, s));
   const MetricResult r = compute_ibsm(mesh, cloud, small(8, 512));
-  // Measured 37.3 dB, SSIM 0.87, 3.1 % unmatched (the simplified monkey scores 26.8 dB in
+  // Measured 36.8 dB, SSIM 0.85, 3.8 % unmatched (the simplified monkey scores 26.8 dB in
   // mmetric's table).
   EXPECT_GT(r.score, 35.0);
   EXPECT_LT(r.score, kPsnrClip);  // never "perfect": the cloud is drawn

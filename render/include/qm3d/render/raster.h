@@ -83,7 +83,7 @@ struct SplatOptions {
 };
 /// Splat size = this many median nearest-neighbour spacings. Chosen by measurement: the monkey
 /// of the CMDM set against 500k points sampled from it (1024², 16 views, discs) scores
-/// YUV PSNR 41.4 / 39.4 / 38.2 dB at 4 / 6 / 8 spacings, with 5.3 / 2.7 / 2.9 % unmatched
+/// YUV PSNR 40.9 / 38.8 / 37.3 dB at 4 / 6 / 8 spacings, with 5.8 / 2.9 / 3.1 % unmatched
 /// pixels (smaller splats leave gaps where no point lands; larger ones widen the silhouette and
 /// blur the colours).
 constexpr double kAutoSplatFactor = 6.0;
