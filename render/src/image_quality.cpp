@@ -250,14 +250,13 @@ double masked_ssim(const GreyImage& a, const GreyImage& b, const std::vector<std
   return masked_mean(a, b, mask, ssim_pixel_term);
 }
 
-double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
-                      const std::vector<std::uint8_t>& mask) {
-  check_sizes(a, b, &mask);
-  GreyImage sa = a, sb = b;
-  std::vector<std::uint8_t> m = mask;
+namespace {
+
+/// MS-SSIM given the mean cs of scale 0 (NaN for an empty mask).
+double ms_ssim_from(GreyImage sa, GreyImage sb, std::vector<std::uint8_t> m, double cs0) {
   double product = 1;
   for (int j = 0; j < kMsSsimScales; ++j) {
-    const double cs = masked_mean(sa, sb, m, contrast_structure_term);
+    const double cs = j == 0 ? cs0 : masked_mean(sa, sb, m, contrast_structure_term);
     if (std::isnan(cs)) return cs;
     product *= std::pow(std::max(cs, 0.0), kMsSsimWeights[j]);
     if (j == kMsSsimScales - 1) {
@@ -270,6 +269,32 @@ double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
     sb = halve(sb);
   }
   return product;
+}
+
+}  // namespace
+
+double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
+                      const std::vector<std::uint8_t>& mask) {
+  check_sizes(a, b, &mask);
+  return ms_ssim_from(a, b, mask, masked_mean(a, b, mask, contrast_structure_term));
+}
+
+SsimScores masked_ssim_scores(const GreyImage& a, const GreyImage& b,
+                              const std::vector<std::uint8_t>& mask) {
+  check_sizes(a, b, &mask);
+  // One pass at full scale gives both S and cs (the same mask pixels, so the same count).
+  double cs_sum = 0;
+  std::size_t count = 0;
+  SsimScores out;
+  out.ssim = masked_mean(a, b, mask, [&](const PixelStats& s) {
+    cs_sum += contrast_structure_term(s);
+    ++count;
+    return ssim_pixel_term(s);
+  });
+  const double cs0 = count ? cs_sum / static_cast<double>(count)
+                           : std::numeric_limits<double>::quiet_NaN();
+  out.ms_ssim = ms_ssim_from(a, b, mask, cs0);
+  return out;
 }
 
 }  // namespace qm3d::render

@@ -233,6 +233,18 @@ TEST(MsSsim, EqualsPaperFormulaDiscMask) {
   EXPECT_LT(ours, 1.0);
 }
 
+TEST(MsSsim, CombinedScoresEqualSeparateCalls) {
+  const GreyImage a = random_image(70, 64, 17), b = noisy_copy(a, 30, 18);
+  const std::vector<std::uint8_t> m = disc_mask(a, 28);
+  const SsimScores both = masked_ssim_scores(a, b, m);
+  EXPECT_EQ(both.ssim, masked_ssim(a, b, m));
+  EXPECT_EQ(both.ms_ssim, masked_ms_ssim(a, b, m));
+  const std::vector<std::uint8_t> none(m.size(), 0);
+  EXPECT_TRUE(std::isnan(masked_ssim_scores(a, b, none).ssim));
+  EXPECT_TRUE(std::isnan(masked_ssim_scores(a, b, none).ms_ssim));
+  EXPECT_THROW(masked_ssim_scores(a, random_image(70, 63, 1), m), std::invalid_argument);
+}
+
 TEST(MsSsim, WeightsArePapers) {
   // Wang et al. 2003, section 3.2 (they sum to 1.0001, as printed in the paper).
   const double paper[5] = {0.0448, 0.2856, 0.3001, 0.2363, 0.1333};
