@@ -43,7 +43,7 @@ int reflect(int i, int n) {
   return i < n ? i : period - 1 - i;
 }
 
-/// A window of an image: [x0, x0 + w) x [y0, y0 + h).
+/// A window of an image: [x0, x0 + w) x [y0, y0 + h) (ssim_map uses the whole image).
 struct Window {
   int x0 = 0, y0 = 0, w = 0, h = 0;
 };
@@ -108,12 +108,6 @@ LocalStats local_stats(const GreyImage& a, const GreyImage& b, const Window& win
   return s;
 }
 
-double luminance_term(const LocalStats& s, std::size_t i) {
-  return (2 * s.mu_a[i] * s.mu_b[i] + kC1) / (s.mu_a[i] * s.mu_a[i] + s.mu_b[i] * s.mu_b[i] + kC1);
-}
-double contrast_structure_term(const LocalStats& s, std::size_t i) {
-  return (2 * s.cov[i] + kC2) / (s.var_a[i] + s.var_b[i] + kC2);
-}
 /// skimage: (A1 A2) / (B1 B2).
 double ssim_term(const LocalStats& s, std::size_t i) {
   const double a1 = 2 * s.mu_a[i] * s.mu_b[i] + kC1, a2 = 2 * s.cov[i] + kC2;
@@ -130,44 +124,88 @@ void check_sizes(const GreyImage& a, const GreyImage& b, const std::vector<std::
   }
 }
 
-/// The mask's bounding box grown by the filter radius (clipped to the image): the filtered
-/// values inside the box are then those of the whole image. Empty (w = 0) for an empty mask.
-Window mask_window(const std::vector<std::uint8_t>& mask, int w, int h) {
-  int x_lo = w, x_hi = -1, y_lo = h, y_hi = -1;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      if (!mask[static_cast<std::size_t>(y) * w + x]) continue;
-      x_lo = std::min(x_lo, x);
-      x_hi = std::max(x_hi, x);
-      y_lo = std::min(y_lo, y);
-      y_hi = std::max(y_hi, y);
+/// The five Gaussian-filtered quantities at one pixel, in the order of LocalStats.
+struct PixelStats {
+  double mu_a = 0, mu_b = 0, var_a = 0, var_b = 0, cov = 0;
+};
+
+/// Vertically filtered a, b, a^2, b^2, ab of one image row over columns [x_lo, x_hi] (the
+/// same sums, in the same order, as gaussian_filter's first pass: the values are identical).
+struct RowSums {
+  std::vector<double> a, b, aa, bb, ab;
+  void fill(const GreyImage& ia, const GreyImage& ib, int y, int x_lo, int x_hi) {
+    for (auto* v : {&a, &b, &aa, &bb, &ab}) v->assign(static_cast<std::size_t>(ia.width), 0.0);
+    const Kernel& k = gaussian_kernel();
+    for (int j = -kRadius; j <= kRadius; ++j) {
+      const std::size_t row = static_cast<std::size_t>(reflect(y + j, ia.height)) * ia.width;
+      const double wj = k[j + kRadius];
+      for (int x = x_lo; x <= x_hi; ++x) {
+        const double pa = ia.values[row + x], pb = ib.values[row + x];
+        a[x] += wj * pa;
+        b[x] += wj * pb;
+        aa[x] += wj * (pa * pa);
+        bb[x] += wj * (pb * pb);
+        ab[x] += wj * (pa * pb);
+      }
     }
   }
-  if (x_hi < 0) return {};
-  Window win;
-  win.x0 = std::max(0, x_lo - kRadius);
-  win.y0 = std::max(0, y_lo - kRadius);
-  win.w = std::min(w, x_hi + kRadius + 1) - win.x0;
-  win.h = std::min(h, y_hi + kRadius + 1) - win.y0;
-  return win;
+  /// The second (horizontal) pass at column x, then the moments as local_stats.
+  PixelStats at(int x, int width) const {
+    const Kernel& k = gaussian_kernel();
+    PixelStats s;
+    double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+    for (int j = 0; j <= 2 * kRadius; ++j) {
+      const int c = reflect(x + j - kRadius, width);
+      sa += k[j] * a[c];
+      sb += k[j] * b[c];
+      saa += k[j] * aa[c];
+      sbb += k[j] * bb[c];
+      sab += k[j] * ab[c];
+    }
+    s.mu_a = sa;
+    s.mu_b = sb;
+    s.var_a = saa - sa * sa;
+    s.var_b = sbb - sb * sb;
+    s.cov = sab - sa * sb;
+    return s;
+  }
+};
+
+double luminance_term(const PixelStats& s) {
+  return (2 * s.mu_a * s.mu_b + kC1) / (s.mu_a * s.mu_a + s.mu_b * s.mu_b + kC1);
+}
+double contrast_structure_term(const PixelStats& s) {
+  return (2 * s.cov + kC2) / (s.var_a + s.var_b + kC2);
+}
+double ssim_pixel_term(const PixelStats& s) {
+  const double a1 = 2 * s.mu_a * s.mu_b + kC1, a2 = 2 * s.cov + kC2;
+  const double b1 = s.mu_a * s.mu_a + s.mu_b * s.mu_b + kC1, b2 = s.var_a + s.var_b + kC2;
+  return (a1 * a2) / (b1 * b2);
 }
 
-/// The mean of term(stats, i) over the mask's pixels (NaN when none).
+/// The mean of term over the mask's pixels (NaN when none). Only the rows holding mask pixels
+/// are filtered, each over its mask span grown by the radius, and the second pass runs only at
+/// mask pixels: the values are those of the whole-image map, in a fraction of the time.
 template <class Term>
 double masked_mean(const GreyImage& a, const GreyImage& b, const std::vector<std::uint8_t>& mask,
                    Term term) {
-  const Window win = mask_window(mask, a.width, a.height);
-  if (win.w == 0) return std::numeric_limits<double>::quiet_NaN();
-  const LocalStats s = local_stats(a, b, win);
+  RowSums sums;
   double sum = 0;
   std::size_t count = 0;
-  for (int y = 0; y < win.h; ++y) {
-    for (int x = 0; x < win.w; ++x) {
-      if (!mask[static_cast<std::size_t>(win.y0 + y) * a.width + win.x0 + x]) continue;
-      sum += term(s, static_cast<std::size_t>(y) * win.w + x);
+  for (int y = 0; y < a.height; ++y) {
+    const std::uint8_t* m = &mask[static_cast<std::size_t>(y) * a.width];
+    int first = 0, last = a.width - 1;
+    while (first < a.width && !m[first]) ++first;
+    if (first == a.width) continue;
+    while (!m[last]) --last;
+    sums.fill(a, b, y, std::max(0, first - kRadius), std::min(a.width - 1, last + kRadius));
+    for (int x = first; x <= last; ++x) {
+      if (!m[x]) continue;
+      sum += term(sums.at(x, a.width));
       ++count;
     }
   }
+  if (count == 0) return std::numeric_limits<double>::quiet_NaN();
   return sum / static_cast<double>(count);
 }
 
@@ -209,17 +247,16 @@ std::vector<double> ssim_map(const GreyImage& a, const GreyImage& b) {
 
 double masked_ssim(const GreyImage& a, const GreyImage& b, const std::vector<std::uint8_t>& mask) {
   check_sizes(a, b, &mask);
-  return masked_mean(a, b, mask, ssim_term);
+  return masked_mean(a, b, mask, ssim_pixel_term);
 }
 
-double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
-                      const std::vector<std::uint8_t>& mask) {
-  check_sizes(a, b, &mask);
-  GreyImage sa = a, sb = b;
-  std::vector<std::uint8_t> m = mask;
+namespace {
+
+/// MS-SSIM given the mean cs of scale 0 (NaN for an empty mask).
+double ms_ssim_from(GreyImage sa, GreyImage sb, std::vector<std::uint8_t> m, double cs0) {
   double product = 1;
   for (int j = 0; j < kMsSsimScales; ++j) {
-    const double cs = masked_mean(sa, sb, m, contrast_structure_term);
+    const double cs = j == 0 ? cs0 : masked_mean(sa, sb, m, contrast_structure_term);
     if (std::isnan(cs)) return cs;
     product *= std::pow(std::max(cs, 0.0), kMsSsimWeights[j]);
     if (j == kMsSsimScales - 1) {
@@ -232,6 +269,32 @@ double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
     sb = halve(sb);
   }
   return product;
+}
+
+}  // namespace
+
+double masked_ms_ssim(const GreyImage& a, const GreyImage& b,
+                      const std::vector<std::uint8_t>& mask) {
+  check_sizes(a, b, &mask);
+  return ms_ssim_from(a, b, mask, masked_mean(a, b, mask, contrast_structure_term));
+}
+
+SsimScores masked_ssim_scores(const GreyImage& a, const GreyImage& b,
+                              const std::vector<std::uint8_t>& mask) {
+  check_sizes(a, b, &mask);
+  // One pass at full scale gives both S and cs (the same mask pixels, so the same count).
+  double cs_sum = 0;
+  std::size_t count = 0;
+  SsimScores out;
+  out.ssim = masked_mean(a, b, mask, [&](const PixelStats& s) {
+    cs_sum += contrast_structure_term(s);
+    ++count;
+    return ssim_pixel_term(s);
+  });
+  const double cs0 = count ? cs_sum / static_cast<double>(count)
+                           : std::numeric_limits<double>::quiet_NaN();
+  out.ms_ssim = ms_ssim_from(a, b, mask, cs0);
+  return out;
 }
 
 }  // namespace qm3d::render
