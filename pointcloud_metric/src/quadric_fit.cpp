@@ -10,6 +10,24 @@ namespace {
 /// implementation's rounding shows in the result.
 constexpr double kConditionLimit = 1e-7;
 
+/// The fast path's limits (QuadricFitter):
+/// * the design with unit columns has its smallest singular value at least kFastSingularBound
+///   (1e5 times the underdetermined limit). Every scaled pivot of a column-pivoted QR is at least
+///   that singular value, so no fit the fast path takes is one the reference's QR would call
+///   underdetermined; and its condition number is at most about 250, so another rounding of the
+///   least-squares solution moves it by about 1e-14 relative (1e-4 gave per-point differences
+///   up to 1e-9 from the reference's on voxelised clouds);
+/// * the normal's eigenvalue separated from the middle one by at least kFastEigenGap of the
+///   largest (a normal determined to about 1e-13; its sign and the tangents' do not matter: |H|
+///   and the foot point p + f n are invariant under them).
+constexpr double kFastSingularBound = 1e-2;
+constexpr double kFastEigenGap = 1e-3;
+/// ... and the points not coplanar to rounding: the normal's eigenvalue at least kFastFlatness of
+/// the largest (heights at least about 1e-4 of the neighbourhood's extent). On a plane (voxelised
+/// clouds) the heights, and so the curvature, are rounding residues that another rounding of the
+/// fit would change wholesale: there the reference's arithmetic decides.
+constexpr double kFastFlatness = 1e-8;
+
 /// Whether every pivot of the column-pivoted QR of `design` is at least kConditionLimit of its
 /// column's norm: the diagonal of R for the design with unit columns, an estimate of the
 /// reciprocal condition number that ignores the columns' scales (x^2, x, 1 differ by orders of
@@ -31,20 +49,10 @@ bool well_conditioned(const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr,
   return true;
 }
 
-}  // namespace
-
-double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double fxy) {
-  return 0.5 * ((1 + fx * fx) * fyy + (1 + fy * fy) * fxx - 2 * fxy * fx * fy) /
-         std::pow(1 + fx * fx + fy * fy, 1.5);
-}
-
-QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& points,
-                              const std::vector<Neighbour>& neighbours) {
-  const Eigen::Index n = static_cast<Eigen::Index>(neighbours.size());
-  if (n == 0) return QuadricFit{origin, 0.0, true};
-
-  // Covariance as E[x x^T] - mu mu^T. Each entry is summed in neighbour order exactly as the
-  // reference's `M = M + neighbor * neighbor.transpose()` does, but in registers.
+// The neighbours' covariance as E[x x^T] - mu mu^T. Each entry is summed in neighbour order
+// exactly as the reference's `M = M + neighbor * neighbor.transpose()` does, but in registers.
+Eigen::Matrix3d covariance(const std::vector<Vec3>& points,
+                           const std::vector<Neighbour>& neighbours) {
   double sx = 0, sy = 0, sz = 0;
   double sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
   for (const Neighbour& nb : neighbours) {
@@ -59,7 +67,7 @@ QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& point
     syz = syz + p[1] * p[2];
     szz = szz + p[2] * p[2];
   }
-  const double count = static_cast<double>(n);
+  const double count = static_cast<double>(neighbours.size());
   const Eigen::Vector3d mean(sx / count, sy / count, sz / count);
   const double inv = 1. / count;
   Eigen::Matrix3d moment;
@@ -67,7 +75,132 @@ QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& point
       inv * sxz - mean(0) * mean(2),  //
       inv * sxy - mean(1) * mean(0), inv * syy - mean(1) * mean(1), inv * syz - mean(1) * mean(2),
       inv * sxz - mean(2) * mean(0), inv * syz - mean(2) * mean(1), inv * szz - mean(2) * mean(2);
+  return moment;
+}
 
+// A lower bound of the smallest singular value of R D^-1 (R upper triangular, D the design's
+// column norms), i.e. of the design with unit columns: 1 / ||(R D^-1)^-1||_F.
+double smallest_singular_value_bound(const double r[6][7], const double norm0[6]) {
+  double u[6][6];
+  for (int i = 0; i < 6; ++i) {
+    for (int j = i; j < 6; ++j) u[i][j] = r[i][j] / norm0[j];
+  }
+  double inv[6][6];
+  double frobenius2 = 0;
+  for (int j = 0; j < 6; ++j) {
+    inv[j][j] = 1 / u[j][j];
+    frobenius2 += inv[j][j] * inv[j][j];
+    for (int i = j - 1; i >= 0; --i) {
+      double sum = 0;
+      for (int k = i + 1; k <= j; ++k) sum += u[i][k] * inv[k][j];
+      inv[i][j] = -sum / u[i][i];
+      frobenius2 += inv[i][j] * inv[i][j];
+    }
+  }
+  return 1 / std::sqrt(frobenius2);
+}
+
+// Householder QR of the n x 6 design held column by column in `col` (col[6] = the heights), no
+// pivoting; solves R c = Q^T z. False when the design with unit columns is not clearly
+// well-conditioned (kFastSingularBound; a pivot |R(k,k)| below that share of its column's norm
+// stops early): the fit is then left to the reference's QR.
+bool solve_well_posed(double* const col[7], std::size_t n, double c[6]) {
+  double norm0[6];
+  for (int k = 0; k < 6; ++k) {
+    double sum = 0;
+    for (std::size_t i = 0; i < n; ++i) sum += col[k][i] * col[k][i];
+    norm0[k] = std::sqrt(sum);
+  }
+  double r[6][7];
+  for (int k = 0; k < 6; ++k) {
+    const double* x = col[k];
+    double sigma = 0;
+    for (std::size_t i = k + 1; i < n; ++i) sigma += x[i] * x[i];
+    const double alpha = x[k];
+    const double norm = std::sqrt(alpha * alpha + sigma);
+    const double beta = alpha > 0 ? -norm : norm;
+    if (!(std::abs(beta) >= kFastSingularBound * norm0[k]) || norm == 0) return false;
+    const double v0 = alpha - beta;
+    const double vtv = v0 * v0 + sigma;
+    r[k][k] = beta;
+    for (int j = k + 1; j < 7; ++j) {
+      double* y = col[j];
+      double dot = v0 * y[k];
+      for (std::size_t i = k + 1; i < n; ++i) dot += x[i] * y[i];
+      const double f = 2 * dot / vtv;
+      y[k] -= f * v0;
+      for (std::size_t i = k + 1; i < n; ++i) y[i] -= f * x[i];
+      r[k][j] = y[k];
+    }
+  }
+  if (!(smallest_singular_value_bound(r, norm0) >= kFastSingularBound)) return false;
+  for (int k = 5; k >= 0; --k) {
+    double sum = r[k][6];
+    for (int j = k + 1; j < 6; ++j) sum -= r[k][j] * c[j];
+    c[k] = sum / r[k][k];
+  }
+  return true;
+}
+
+}  // namespace
+
+double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double fxy) {
+  return 0.5 * ((1 + fx * fx) * fyy + (1 + fy * fy) * fxx - 2 * fxy * fx * fy) /
+         std::pow(1 + fx * fx + fy * fy, 1.5);
+}
+
+QuadricFit QuadricFitter::fit(const Vec3& origin, const std::vector<Vec3>& points,
+                              const std::vector<Neighbour>& neighbours) {
+  QuadricFit out;
+  if (fit_well_posed(origin, points, neighbours, out)) return out;
+  return fit_as_reference(origin, points, neighbours);
+}
+
+bool QuadricFitter::fit_well_posed(const Vec3& origin, const std::vector<Vec3>& points,
+                                   const std::vector<Neighbour>& neighbours, QuadricFit& out) {
+  const std::size_t n = neighbours.size();
+  if (n < 6) return false;
+  const Eigen::Matrix3d moment = covariance(points, neighbours);
+  if (!moment.allFinite()) return false;
+  eigen3_.compute(moment);
+  if (eigen3_.info() != Eigen::Success) return false;
+  const Eigen::Vector3d& values = eigen3_.eigenvalues();  // ascending
+  if (!(values(1) - values(0) >= kFastEigenGap * std::abs(values(2)))) return false;
+  if (!(values(0) >= kFastFlatness * std::abs(values(2)))) return false;
+  const Eigen::Vector3d t1 = eigen3_.eigenvectors().col(2);
+  const Eigen::Vector3d t2 = eigen3_.eigenvectors().col(1);
+  const Eigen::Vector3d normal = eigen3_.eigenvectors().col(0);
+  columns_.resize(7 * n);
+  double* const col[7] = {&columns_[0],     &columns_[n],     &columns_[2 * n], &columns_[3 * n],
+                          &columns_[4 * n], &columns_[5 * n], &columns_[6 * n]};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& p = points[neighbours[i].index];
+    const double v0 = p[0] - origin[0], v1 = p[1] - origin[1], v2 = p[2] - origin[2];
+    const double x = v0 * t1(0) + v1 * t1(1) + v2 * t1(2);
+    const double y = v0 * t2(0) + v1 * t2(1) + v2 * t2(2);
+    col[0][i] = x * x;
+    col[1][i] = y * y;
+    col[2][i] = x * y;
+    col[3][i] = x;
+    col[4][i] = y;
+    col[5][i] = 1;
+    col[6][i] = v0 * normal(0) + v1 * normal(1) + v2 * normal(2);
+  }
+  double c[6];
+  if (!solve_well_posed(col, n, c)) return false;
+  out.foot = Vec3{origin[0] + c[5] * normal(0), origin[1] + c[5] * normal(1),
+                  origin[2] + c[5] * normal(2)};
+  out.mean_curvature = graph_mean_curvature(c[3], c[4], 2 * c[0], 2 * c[1], c[2]);
+  out.underdetermined = false;
+  return true;
+}
+
+QuadricFit QuadricFitter::fit_as_reference(const Vec3& origin, const std::vector<Vec3>& points,
+                                          const std::vector<Neighbour>& neighbours) {
+  const Eigen::Index n = static_cast<Eigen::Index>(neighbours.size());
+  if (n == 0) return QuadricFit{origin, 0.0, true};
+
+  const Eigen::Matrix3d moment = covariance(points, neighbours);
   eigen_.compute(moment);
   const Eigen::Vector3d t1 = eigen_.eigenvectors().col(2);
   const Eigen::Vector3d t2 = eigen_.eigenvectors().col(1);

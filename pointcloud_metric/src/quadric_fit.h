@@ -13,7 +13,10 @@ namespace qm3d::pointcloud::detail {
 
 struct QuadricFit {
   Vec3 foot{0, 0, 0};         ///< origin + f n: the origin projected onto the fitted surface
-  double mean_curvature = 0;  ///< H at the origin (signed, in inverse coordinate units)
+  /// H at the origin (in inverse coordinate units), signed along the normal, whose orientation
+  /// is the eigen-solver's (either path may choose the other one: |H| and `foot` do not depend
+  /// on it).
+  double mean_curvature = 0;
   /// The six coefficients are not determined by the points, or barely: fewer than six points,
   /// too few distinct positions, or a design so ill-conditioned (scaled pivot ratio below 1e-7)
   /// that the solution moves beyond 1e-9 with rounding. The solution is then the QR's "basic"
@@ -21,9 +24,16 @@ struct QuadricFit {
   bool underdetermined = false;
 };
 
-/// Fits quadrics; holds the Eigen workspaces so that one fitter per thread allocates little.
+/// Fits quadrics; holds the workspaces so that one fitter per thread allocates little.
 ///
-/// Bit-for-bit the reference's arithmetic: raw second moment minus the mean's outer product,
+/// Two paths give the same fit to rounding (the least-squares problem has one solution):
+/// * a fast one for well-posed fits (nearly all): Eigen's fixed-size 3x3 eigen-solver and an
+///   unpivoted Householder QR of the n x 6 design of our own, on flat arrays;
+/// * the reference's, for everything else (fewer than six points, a barely separated normal,
+///   a design whose unit-column form is not clearly well-conditioned, non-finite input), where the
+///   reference's rounding decides the value (SPEC-PCQM §9.5).
+///
+/// The reference's path is bit-for-bit its arithmetic: raw second moment minus the mean's outer product,
 /// `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
 /// differently), frame t1 = largest, t2 = middle, n = smallest eigenvector, coordinates relative
 /// to the origin, `ColPivHouseholderQR<MatrixXd>` (its basic solution when there are fewer than
@@ -36,7 +46,17 @@ class QuadricFitter {
   QuadricFit fit(const Vec3& origin, const std::vector<Vec3>& points,
                  const std::vector<Neighbour>& neighbours);
 
+  /// The reference's path alone (what fit() falls back to).
+  QuadricFit fit_as_reference(const Vec3& origin, const std::vector<Vec3>& points,
+                              const std::vector<Neighbour>& neighbours);
+
  private:
+  /// The fast path; false (and `out` untouched) when the fit is not clearly well-posed.
+  bool fit_well_posed(const Vec3& origin, const std::vector<Vec3>& points,
+                      const std::vector<Neighbour>& neighbours, QuadricFit& out);
+
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen3_;
+  std::vector<double> columns_;  ///< the fast path's design, column by column, then the heights
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen_{3};
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;
   Eigen::MatrixXd design_;

@@ -145,6 +145,69 @@ TEST(QuadricFitter, BitIdenticalToTheReferenceExpressions) {
     }
     const Vec3 origin = pts[0];
     const QuadricFit expected = reference_style_fit(origin, pts);
+    const QuadricFit got = fitter.fit_as_reference(origin, pts, all_of(pts));
+    ASSERT_EQ(got.mean_curvature, expected.mean_curvature) << "trial " << trial;
+    ASSERT_EQ(got.foot, expected.foot) << "trial " << trial;
+  }
+}
+
+// fit() takes its fast path only where the fit is well-posed: there it agrees with the
+// reference's arithmetic to rounding; elsewhere (underdetermined fits, where the reference's
+// rounding decides) it is the reference's value bit for bit.
+TEST(QuadricFitter, FastPathAgreesAndUnderdeterminedFitsKeepTheReferenceBits) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g;
+  QuadricFitter fitter;
+  int underdetermined = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const int n = 1 + trial % 40;
+    const Vec3 centre{3 * g(rng), 3 * g(rng), 3 * g(rng)};
+    std::vector<Vec3> pts(n);
+    for (Vec3& p : pts) {
+      const double x = 0.01 * g(rng), y = 0.01 * g(rng);
+      p = {centre[0] + x, centre[1] + y, centre[2] + 2 * x * x - y * y + 1e-4 * g(rng)};
+    }
+    // Every fourth cloud repeats four positions: rank-deficient designs.
+    if (trial % 4 == 3) {
+      for (std::size_t i = 4; i < pts.size(); ++i) pts[i] = pts[i % 4];
+    }
+    const Vec3 origin = pts[0];
+    const QuadricFit expected = fitter.fit_as_reference(origin, pts, all_of(pts));
+    const QuadricFit got = fitter.fit(origin, pts, all_of(pts));
+    ASSERT_EQ(got.underdetermined, expected.underdetermined) << "trial " << trial;
+    if (expected.underdetermined) {
+      ++underdetermined;
+      ASSERT_EQ(got.mean_curvature, expected.mean_curvature) << "trial " << trial;
+      ASSERT_EQ(got.foot, expected.foot) << "trial " << trial;
+      continue;
+    }
+    // |H|: the normal's sign is the eigen-solver's choice (PCQM uses |H| and the foot point,
+    // which do not depend on it).
+    ASSERT_NEAR(std::abs(got.mean_curvature), std::abs(expected.mean_curvature),
+                1e-9 * std::abs(expected.mean_curvature) + 1e-12)
+        << "trial " << trial;
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_NEAR(got.foot[k], expected.foot[k], 1e-14 * (1 + std::abs(expected.foot[k])))
+          << "trial " << trial;
+    }
+  }
+  EXPECT_GT(underdetermined, 1200);  // the test reaches the reference's path
+}
+
+// Coplanar points far from the origin (a voxelised plane): the heights are rounding residues, so
+// the fit is left to the reference's arithmetic, bit for bit.
+TEST(QuadricFitter, CoplanarPointsKeepTheReferenceBits) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cell(-4, 4);
+  QuadricFitter fitter;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<Vec3> pts(30);
+    for (Vec3& p : pts) {
+      const double x = 517.0 + cell(rng), y = 230.0 + cell(rng);
+      p = {x, y, 811.0 + 0.3 * x + 0.7 * y + 0.01 * trial};  // a tilted plane
+    }
+    const Vec3 origin = pts[0];
+    const QuadricFit expected = fitter.fit_as_reference(origin, pts, all_of(pts));
     const QuadricFit got = fitter.fit(origin, pts, all_of(pts));
     ASSERT_EQ(got.mean_curvature, expected.mean_curvature) << "trial " << trial;
     ASSERT_EQ(got.foot, expected.foot) << "trial " << trial;
