@@ -94,8 +94,9 @@ IbsmView compare_views(const View& a, const View& b, const Float3& direction, bo
   if (image_quality && out.matched > 0) {
     const GreyImage la = luma_image(a), lb = luma_image(b);
     const std::vector<std::uint8_t> mask = both_covered(a, b);
-    out.ssim = masked_ssim(la, lb, mask);
-    out.ms_ssim = masked_ms_ssim(la, lb, mask);
+    const SsimScores q = masked_ssim_scores(la, lb, mask);
+    out.ssim = q.ssim;
+    out.ms_ssim = q.ms_ssim;
   }
   return out;
 }
