@@ -97,10 +97,6 @@ struct Colouring {
   bool bilinear = false;
 };
 
-/// The 8-bit value of a channel our readers hold as u / 255 (exact for 8-bit sources) or an
-/// OBJ's float colour: mmetric's roundf(value * 255) on the float.
-float to_255(double c) { return std::round(static_cast<float>(c) * 255.0f); }
-
 struct Grid {
   Float3 min;
   Float3 max;
@@ -144,7 +140,7 @@ TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Col
   } else if (colouring.vertex != nullptr) {
     for (int k = 0; k < 3; ++k) {
       const Rgb& v = (*colouring.vertex)[tri[k]];
-      col[k] = {to_255(v.r), to_255(v.g), to_255(v.b)};
+      col[k] = {mm_channel_255(v.r), mm_channel_255(v.g), mm_channel_255(v.b)};
     }
   }
   const int first_axis = all_axes ? 0 : main_axis(normal);

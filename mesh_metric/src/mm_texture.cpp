@@ -9,15 +9,12 @@
 namespace qm3d::mesh {
 namespace {
 
-/// The 8-bit value of a texel channel held as u / 255: mmetric's roundf(value * 255).
-float to_255(double c) { return std::round(static_cast<float>(c) * 255.0f); }
-
 /// Texel (x, y) with y counted from the bottom row, both clamped to the image.
 Float3 texel(const TextureImage& img, int x, int y) {
   x = std::min(std::max(x, 0), img.width - 1);
   y = img.height - 1 - std::min(std::max(y, 0), img.height - 1);
   const Rgb& c = img.texels[static_cast<std::size_t>(y) * img.width + x];
-  return {to_255(c.r), to_255(c.g), to_255(c.b)};
+  return {mm_channel_255(c.r), mm_channel_255(c.g), mm_channel_255(c.b)};
 }
 
 }  // namespace

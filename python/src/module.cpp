@@ -467,9 +467,6 @@ PYBIND11_MODULE(_qm3d, m) {
           } else {
             f = render::frame_of(model, model);
           }
-          if (o.layout == render::ViewLayout::kCmdm18 && o.views != 16) {
-            throw std::invalid_argument("views: applies to the fibonacci layout (cmdm18 has 18)");
-          }
           dirs = render::view_directions(o);
           views = render::render_views(model, f, dirs, {o.resolution, o.culling, o.lighting},
                                        threads);

@@ -201,10 +201,6 @@ nlohmann::json view_details(const IbsmView& v) {
 }
 
 void check_options(const IbsmOptions& o) {
-  if (o.layout == ViewLayout::kCmdm18) {
-    if (o.views != 16) throw std::invalid_argument("views: applies to the fibonacci layout (cmdm18 has 18)");
-    if (o.rotation_deg[2] != 0) throw std::invalid_argument("rotation: applies to the fibonacci layout");
-  }
   if (o.views < 2) throw std::invalid_argument("views: at least 2 (mmetric divides by views - 1)");
   if (o.resolution < 16 || o.resolution > 16384) {
     throw std::invalid_argument("resolution: 16 to 16384 pixels (got " +
@@ -213,18 +209,6 @@ void check_options(const IbsmOptions& o) {
 }
 
 }  // namespace
-
-std::vector<float> view_luma(const View& view) {
-  std::vector<float> out(static_cast<std::size_t>(view.width) * view.height);
-  for (int y = 0; y < view.height; ++y) {
-    for (int x = 0; x < view.width; ++x) {
-      const std::size_t src = static_cast<std::size_t>(view.height - 1 - y) * view.width + x;
-      out[static_cast<std::size_t>(y) * view.width + x] =
-          yuv_of(view.rgba[src * 4], view.rgba[src * 4 + 1], view.rgba[src * 4 + 2])[0];
-    }
-  }
-  return out;
-}
 
 std::vector<View> render_views(const RenderModel& model, const Frame& frame,
                                const std::vector<Float3>& directions, const RasterOptions& options,
@@ -251,6 +235,7 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
                           const std::string& distorted_name) {
   const auto start = std::chrono::steady_clock::now();
   check_options(options);
+  const std::vector<Float3> dirs = view_directions(options);  // checks the layout's options
   if (!options.save_views.empty()) {
     std::error_code error;
     std::filesystem::create_directories(options.save_views, error);
@@ -260,7 +245,6 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
     }
   }
   const Frame frame = frame_of(reference, distorted);
-  const std::vector<Float3> dirs = view_directions(options);
   const std::vector<IbsmView> views = compare_all_views(reference, distorted, frame, dirs, options);
   MetricResult r;
   r.metric = "ibsm";
@@ -359,7 +343,15 @@ MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, co
 }  // namespace
 
 std::vector<Float3> view_directions(const IbsmOptions& options) {
-  if (options.layout == ViewLayout::kCmdm18) return cmdm18_directions();
+  if (options.layout == ViewLayout::kCmdm18) {
+    if (options.views != 16) {
+      throw std::invalid_argument("views: applies to the fibonacci layout (cmdm18 has 18)");
+    }
+    if (options.rotation_deg[2] != 0) {
+      throw std::invalid_argument("rotation: applies to the fibonacci layout");
+    }
+    return cmdm18_directions();
+  }
   return fibonacci_directions(options.views, options.rotation_deg);
 }
 

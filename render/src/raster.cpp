@@ -29,10 +29,6 @@ namespace {
 F3 f3(const Float3& a) { return {a[0], a[1], a[2]}; }
 Float3 arr(F3 a) { return {a.x, a.y, a.z}; }
 
-/// mmetric's colour of a value in [0, 1]: roundf((float)value * 255) (mmIO.cpp `_loadObj`; PLY
-/// integers give the same integer back).
-float colour_255(double c) { return std::roundf(static_cast<float>(c) * 255.0f); }
-
 struct VertexKey {
   Float3 pos;
   std::array<float, 2> uv{0, 0};
@@ -153,7 +149,7 @@ RenderModel mesh_model(const ColoredMesh& mesh, bool has_colors) {
       k.pos = float_position(mesh.positions[v]);
       if (has_colors) {
         const Rgb& c = mesh.colors[v];
-        k.col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
+        k.col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g), mesh::mm_channel_255(c.b)};
       }
       corners.push_back(k);
     }
@@ -231,7 +227,7 @@ RenderModel cloud_model(const ColoredCloud& cloud, const SplatOptions& options) 
     keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
     if (has_colors) {
       const Rgb& c = cloud.colors[i];
-      keys[i].col = {colour_255(c.r), colour_255(c.g), colour_255(c.b)};
+      keys[i].col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g), mesh::mm_channel_255(c.b)};
     }
   }
   std::sort(keys.begin(), keys.end(), key_less);

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "cli_runner.h"
+#include "mpeg_reference.h"
 #include "test_paths.h"
 
 namespace qm3d {
@@ -45,23 +46,8 @@ const std::string kSimplified = "reference/cmdm/monkey_simplified.obj";
 
 /// The row of mm_ibsm_reference.csv named `name`, as column -> text.
 std::map<std::string, std::string> reference_row(const std::string& name) {
-  std::ifstream in(test::reference_dir() / "mpeg" / "mm_ibsm_reference.csv");
-  auto split = [](const std::string& line) {
-    std::vector<std::string> f;
-    std::stringstream s(line);
-    std::string item;
-    while (std::getline(s, item, ';')) f.push_back(item);
-    return f;
-  };
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = split(line);
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = split(line);
-    if (f.empty() || f[0] != name) continue;
-    std::map<std::string, std::string> row;
-    for (std::size_t i = 0; i < header.size() && i < f.size(); ++i) row[header[i]] = f[i];
-    return row;
+  for (const test::PcErrorCase& c : test::mpeg_cases("mm_ibsm_reference.csv")) {
+    if (c.name == name) return c.column;
   }
   return {};
 }

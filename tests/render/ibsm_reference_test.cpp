@@ -14,35 +14,11 @@
 #include "qm3d/common/metric.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/render/ibsm.h"
+#include "mpeg_reference.h"
 #include "test_paths.h"
 
 namespace qm3d::render {
 namespace {
-
-using Row = std::map<std::string, std::string>;
-
-std::vector<Row> reference_rows() {
-  std::ifstream in(test::reference_dir() / "mpeg" / "mm_ibsm_reference.csv");
-  auto split = [](const std::string& line) {
-    std::vector<std::string> f;
-    std::stringstream s(line);
-    std::string item;
-    while (std::getline(s, item, ';')) f.push_back(item);
-    return f;
-  };
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = split(line);
-  std::vector<Row> rows;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    const std::vector<std::string> f = split(line);
-    Row r;
-    for (std::size_t i = 0; i < header.size(); ++i) r[header[i]] = i < f.size() ? f[i] : "";
-    rows.push_back(r);
-  }
-  return rows;
-}
 
 /// mmetric's ibsm options as qm3d's.
 OptionValues options_of(const std::string& args) {
@@ -93,13 +69,14 @@ const std::map<std::string, std::string> kColumns = {
     {"YUV_PSNR", "yuv_psnr"}, {"GEO_PSNR", "geo_psnr"}};
 
 TEST(IbsmReference, EveryValueOfEveryCase) {
-  const std::vector<Row> rows = reference_rows();
+  const std::vector<test::PcErrorCase> rows = test::mpeg_cases("mm_ibsm_reference.csv");
   ASSERT_EQ(rows.size(), 10u);
   double worst = 0;
   std::string worst_where;
   RunOptions run;
   run.threads = 2;
-  for (const Row& row : rows) {
+  for (const test::PcErrorCase& c : rows) {
+    const std::map<std::string, std::string>& row = c.column;
     SCOPED_TRACE(row.at("case"));
     const Input a = registry().read(test::shared_data() / row.at("mesh_a"));
     const Input b = registry().read(test::shared_data() / row.at("mesh_b"));

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -39,6 +40,10 @@ TextureImage read_texture(const std::filesystem::path& path);
 
 /// Bilinear, wrapping lookup of `image` at `uv` (conventions above).
 Rgb sample_texture(const TextureImage& image, const Uv& uv);
+
+/// mmetric's 8-bit value of a colour channel held in [0, 1] (u / 255 for 8-bit sources, an OBJ's
+/// float): roundf((float)c * 255), as it reads OBJ and PLY colours and texels.
+inline float mm_channel_255(double c) { return std::round(static_cast<float>(c) * 255.0f); }
 
 /// mmetric 1.1.7's lookup of `image` at float (u, v) (mmImage.h texture2D / texture2D_bilinear):
 /// nearest (texel floor(u W), floor(v H)) or bilinear between the four nearest texel centres,

@@ -63,7 +63,8 @@ struct IbsmView {
   bool left_out = false;          ///< an image is empty
 };
 
-/// The view directions of `options` (its layout, count and rotation).
+/// The view directions of `options` (its layout, count and rotation); std::invalid_argument
+/// when the cmdm18 layout is given a count or a rotation.
 std::vector<Float3> view_directions(const IbsmOptions& options);
 
 /// The options of an ibsm run from the registry's option values (all filled; ibsm_spec()).
@@ -97,10 +98,6 @@ std::vector<ViewPair> result_view_pairs(const MetricResult& result, const Input&
 std::vector<View> render_views(const RenderModel& model, const Frame& frame,
                                const std::vector<Float3>& directions, const RasterOptions& options,
                                int threads = 0);
-
-/// The luma (BT.709 Y in 0..255, as mmetric's rgbToYuvBt709_256 in float) of a view, rows top
-/// first; 0 where nothing is drawn.
-std::vector<float> view_luma(const View& view);
 
 /// The registry entry: metric `ibsm` for meshes and clouds (any pair).
 MetricSpec ibsm_spec();

@@ -34,7 +34,7 @@
 
 namespace qm3d::render {
 
-using Float3 = std::array<float, 3>;
+using qm3d::Float3;  // common/grid_samples.h
 
 /// How a cloud's points are drawn.
 enum class SplatShape {
