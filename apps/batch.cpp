@@ -477,7 +477,9 @@ std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
   std::vector<const MetricSpec*> specs;
   for (const ListPair& p : pairs) {
     if (p.metric == "compare") {
-      for (const MetricSpec& s : registry().metrics()) specs.push_back(&s);
+      for (const MetricSpec& s : registry().metrics()) {
+        if (s.in_compare) specs.push_back(&s);  // what `compare` runs
+      }
     } else if (const MetricSpec* s = registry().find(p.metric)) {
       specs.push_back(s);
     }

@@ -106,7 +106,10 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
   for (const auto& p : kPairs) {
     inputs.emplace_back(registry().read(dir / p.reference), registry().read(dir / p.distorted));
   }
+  // Metrics asked for by name only (MetricSpec::in_compare false, e.g. ibsm's rendering) are
+  // left out, as in `compare`.
   for (const auto& m : registry().metrics()) {
+    if (!m.in_compare) continue;
     for (const auto& [ref, dist] : inputs) {
       if (m.applies(ref, dist)) {
         columns.push_back(&m);
@@ -143,8 +146,13 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
     }
     row(out, kPairs[i].what, cells);
   }
-  out << "\nScores are distortions (0 = identical). PCQM on meshes uses their vertices; "
-         "PCQM_SAMPLED samples both surfaces alike.\n";
+  std::string qualities;
+  for (const MetricSpec* m : columns) {
+    if (m->higher_is_better) qualities += (qualities.empty() ? "" : ", ") + m->title;
+  }
+  out << "\nScores are distortions (0 = identical)";
+  if (!qualities.empty()) out << ", except " << qualities << " (a quality in dB: higher is better, inf = identical)";
+  out << ". PCQM on meshes uses their vertices; PCQM_SAMPLED samples both surfaces alike.\n";
   if (!settings) return 0;
   std::vector<ReportEntry> entries;
   for (std::size_t i = 0; i < reported.size(); ++i) {

@@ -322,6 +322,9 @@ TEST_F(Cli, DemoScoresTheBundledData) {
   const CliRun r = qm3d("demo");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("geometric + colour noise"), std::string::npos);
+  // Only the metrics `compare` runs: ibsm is asked for by name (it renders 16 views per pair).
+  EXPECT_EQ(r.out.find("IBSM"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("except PSNR"), std::string::npos) << r.out;
 }
 
 // --- batch -------------------------------------------------------------------------------------
