@@ -477,9 +477,8 @@ std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
   std::vector<const MetricSpec*> specs;
   for (const ListPair& p : pairs) {
     if (p.metric == "compare") {
-      for (const MetricSpec& s : registry().metrics()) {
-        if (s.in_compare) specs.push_back(&s);  // what `compare` runs
-      }
+      // Every metric's value columns, as qm3d.dask's fixed schema has them.
+      for (const MetricSpec& s : registry().metrics()) specs.push_back(&s);
     } else if (const MetricSpec* s = registry().find(p.metric)) {
       specs.push_back(s);
     }
