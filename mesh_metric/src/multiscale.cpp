@@ -2,8 +2,9 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
-#include <deque>
+#include <list>
 #include <future>
 #include <optional>
 #include <stdexcept>
@@ -103,15 +104,18 @@ class CurvatureCache {
   CurvatureCache(CurvatureVariant variant, bool reuse, int threads)
       : variant_(variant), reuse_(reuse), threads_(threads) {}
 
+  /// The curvature of `mesh` at `radius`; the reference stays valid until release(mesh).
   const std::vector<double>& get(const HalfedgeMesh& mesh, double radius, double maxdim) {
     for (const Entry& e : entries_) {
       if (e.mesh == &mesh && e.radius == radius && e.maxdim == maxdim) return e.values;
     }
-    // Without reuse only the current scale's pair is kept (popping the front of a deque leaves
-    // references to the other entries valid).
-    if (!reuse_ && entries_.size() >= 2) entries_.pop_front();
     entries_.push_back({&mesh, radius, maxdim, processed_curvature(mesh, radius, maxdim, variant_, threads_)});
     return entries_.back().values;
+  }
+  /// Frees `mesh`'s curvatures unless the other direction will use them (a list: erasing keeps
+  /// the references to the other entries valid).
+  void release(const HalfedgeMesh& mesh) {
+    if (!reuse_) entries_.remove_if([&](const Entry& e) { return e.mesh == &mesh; });
   }
 
  private:
@@ -123,24 +127,32 @@ class CurvatureCache {
   CurvatureVariant variant_;
   bool reuse_;
   int threads_;
-  std::deque<Entry> entries_;
+  std::list<Entry> entries_;
 };
 
-// Adds each vertex's features at one scale to the running sums.
-void accumulate_scale(const MatchedFields& fields, const WalkParameters& walk,
-                      const FeatureConventions& conventions, std::vector<FeatureVector>& sums,
-                      int threads) {
+// One walk per vertex serves at most this many scales (each scale in a walk keeps two curvature
+// values per vertex: 10 MB per scale on a 655k-vertex mesh).
+constexpr int kScalesPerWalk = 8;
+
+// Adds each vertex's features at the scales of `levels` to the running sums, scale by scale.
+void accumulate_scales(const std::vector<MatchedFields>& levels,
+                       const std::vector<WalkParameters>& walks,
+                       const FeatureConventions& conventions, std::vector<FeatureVector>& sums,
+                       int threads) {
   const auto n = static_cast<std::int64_t>(sums.size());
+  const bool with_color = levels.front().color != nullptr;
 #pragma omp parallel num_threads(threads)
   {
-    WalkScratch scratch;
-    NeighbourhoodSamples samples;
+    MultiWalkScratch scratch;
+    std::vector<NeighbourhoodSamples> samples;
 #pragma omp for schedule(dynamic, 512)
     for (std::int64_t v = 0; v < n; ++v) {
-      sample_neighbourhood(fields, static_cast<std::uint32_t>(v), walk, scratch, samples);
-      const FeatureVector f = fields.color ? local_features(samples, conventions)
-                                           : curvature_features(samples, conventions);
-      for (std::size_t k = 0; k < kNumFeatures; ++k) sums[v][k] += f[k];
+      sample_neighbourhoods(levels, static_cast<std::uint32_t>(v), walks, scratch, samples);
+      for (const NeighbourhoodSamples& s : samples) {
+        const FeatureVector f =
+            with_color ? local_features(s, conventions) : curvature_features(s, conventions);
+        for (std::size_t k = 0; k < kNumFeatures; ++k) sums[v][k] += f[k];
+      }
     }
   }
 }
@@ -155,20 +167,36 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
   std::vector<Lab> lab_match;
   if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab);
   const double maxdim = iterated.box_size;
+  const std::string of_scales = "/" + std::to_string(scales);
   std::vector<FeatureVector> sums(iterated.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
-  for (int level = 0; level < scales; ++level) {
-    progress.begin(label + ": scale " + std::to_string(level + 1) + "/" + std::to_string(scales));
-    const auto& curv1 = curvatures.get(iterated.mesh, maxdim * rc, maxdim);
-    const auto curv_match =
-        interpolate_all(matches, other.mesh, curvatures.get(other.mesh, maxdim * rc, maxdim));
-    const MatchedFields fields{&iterated.mesh, &matched_point, &curv1, &curv_match,
-                               def.uses_color ? &iterated.lab : nullptr,
-                               def.uses_color ? &lab_match : nullptr};
-    const double h = rc * def.neighbourhood_factor * maxdim;
-    accumulate_scale(fields, {h, h / def.sigma_divisor, def.strict_outward_test}, def.conventions,
-                     sums, threads);
-    rc += def.radius_step;
+  for (int first = 0; first < scales; first += kScalesPerWalk) {
+    const int end = std::min(scales, first + kScalesPerWalk);
+    std::vector<std::vector<double>> curv_match;
+    std::vector<MatchedFields> levels;
+    std::vector<WalkParameters> walks;
+    curv_match.reserve(end - first);  // `levels` points into it
+    for (int level = first; level < end; ++level) {
+      progress.begin(label + ": curvature, scale " + std::to_string(level + 1) + of_scales);
+      const auto& curv1 = curvatures.get(iterated.mesh, maxdim * rc, maxdim);
+      curv_match.push_back(
+          interpolate_all(matches, other.mesh, curvatures.get(other.mesh, maxdim * rc, maxdim)));
+      curvatures.release(other.mesh);
+      levels.push_back({&iterated.mesh, &matched_point, &curv1, &curv_match.back(),
+                        def.uses_color ? &iterated.lab : nullptr,
+                        def.uses_color ? &lab_match : nullptr});
+      const double h = rc * def.neighbourhood_factor * maxdim;
+      walks.push_back({h, h / def.sigma_divisor, def.strict_outward_test});
+      rc += def.radius_step;
+    }
+    // "neighbourhoods, scales 1-3", or "scales 9-16 of 20" when one walk cannot serve them all.
+    std::string which = end - first == 1 ? "scale " + std::to_string(end)
+                                         : "scales " + std::to_string(first + 1) + "-" +
+                                               std::to_string(end);
+    if (end - first < scales) which += " of " + std::to_string(scales);
+    progress.begin(label + ": neighbourhoods, " + which, end - first);
+    accumulate_scales(levels, walks, def.conventions, sums, threads);
+    curvatures.release(iterated.mesh);
   }
   return sums;
 }
@@ -210,8 +238,9 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
   }
   check_thread_count(run.threads);  // libgomp crashes on tens of thousands
   const bool both = run.direction == Direction::kSymmetric;
-  // Steps of about equal cost: preparing, then per direction its matching and each scale.
-  ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + run.scales));
+  // Steps of about equal cost: preparing, then per direction its matching, each scale's
+  // curvature and each scale's neighbourhoods.
+  ProgressSteps progress(run.progress, 1 + (both ? 2 : 1) * (1 + 2 * run.scales));
   progress.begin("connectivity");
   // Every parallel part gets an explicit thread count: OpenMP regions started from a std::async
   // task would otherwise use the default, not the caller's setting. Two concurrent tasks share

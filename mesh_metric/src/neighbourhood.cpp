@@ -69,6 +69,39 @@ void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, doub
   out.hue_diff.push_back(hue_difference(s.color1, s.color2, chroma1, chroma2));
 }
 
+// A vertex sample at several levels: the distances, colours, chroma and hue difference do not
+// depend on the level, so they are computed once (the same operations as push_sample).
+void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t first,
+                        std::uint32_t w, const Vec3& center1, const Vec3& center2,
+                        const std::vector<WalkParameters>& walks, bool with_color,
+                        std::vector<NeighbourhoodSamples>& out) {
+  const MatchedFields& f = levels.front();
+  const double d1 = distance(f.mesh->positions[w], center1);
+  const double d2 = distance((*f.matched_point)[w], center2);
+  Lab c1, c2;
+  double chroma1 = 0, chroma2 = 0, hue = 0;
+  if (with_color) {
+    c1 = (*f.color)[w];
+    c2 = (*f.color_match)[w];
+    chroma1 = chroma(c1);
+    chroma2 = chroma(c2);
+    hue = hue_difference(c1, c2, chroma1, chroma2);
+  }
+  for (std::size_t j = first; j < levels.size(); ++j) {
+    NeighbourhoodSamples& o = out[j];
+    o.w1.push_back(gaussian_weight(d1, walks[j].sigma));
+    o.w2.push_back(gaussian_weight(d2, walks[j].sigma));
+    o.curv1.push_back((*levels[j].curvature)[w]);
+    o.curv2.push_back((*levels[j].curvature_match)[w]);
+    if (!with_color) continue;
+    o.light1.push_back(c1.L);
+    o.light2.push_back(c2.L);
+    o.chroma1.push_back(chroma1);
+    o.chroma2.push_back(chroma2);
+    o.hue_diff.push_back(hue);
+  }
+}
+
 }  // namespace
 
 bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v) {
@@ -106,6 +139,62 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
                                       : vertex_sample(f, w);
                  push_sample(s, o, q0, walk.sigma, with_color, out);
                });
+}
+
+}  // namespace qm3d::mesh::detail
+
+namespace qm3d::mesh::detail {
+
+void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32_t v0,
+                           const std::vector<WalkParameters>& walks, MultiWalkScratch& scratch,
+                           std::vector<NeighbourhoodSamples>& out) {
+  const MatchedFields& f = levels.front();
+  const HalfedgeMesh& m = *f.mesh;
+  const bool with_color = f.color != nullptr;
+  const bool strict = walks.front().strict_outward_test;
+  const Vec3& o = m.positions[v0];
+  const Vec3& q0 = (*f.matched_point)[v0];
+  out.resize(levels.size());
+  for (NeighbourhoodSamples& s : out) s.clear();
+  scratch.start(m.positions.size());
+  scratch.pending.clear();
+  scratch.enter(v0);
+  push_vertex_levels(levels, 0, v0, o, q0, walks, with_color, out);
+  for (std::size_t level = 0; level < levels.size(); ++level) {
+    const double r = walks[level].radius;
+    const bool last = level + 1 == levels.size();
+    scratch.next.clear();
+    // Edge k = (w -> v), outward from v0: a crossing sample at this level (and tested again at
+    // the next), or w entered here (when it was not already).
+    const auto on_edge = [&](std::uint32_t v, std::uint32_t k, const Vec3& edge) {
+      const std::uint32_t w = m.rings.source[k];
+      Vec3 vec = edge;
+      if (!sphere_clip_vector_cmdm(o, r, m.positions[v], vec)) {
+        if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, walks, with_color, out);
+        return;
+      }
+      const MatchedFields& here = levels[level];
+      const Sample s = dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, edge)
+                                            : vertex_sample(here, w);
+      push_sample(s, o, q0, walks[level].sigma, with_color, out[level]);
+      if (!last) scratch.next.emplace_back(v, k);
+    };
+    for (const auto& [v, k] : scratch.pending) {
+      on_edge(v, k, sub(m.positions[m.rings.source[k]], m.positions[v]));
+    }
+    while (!scratch.stack.empty()) {
+      const std::uint32_t v = scratch.stack.back();
+      scratch.stack.pop_back();
+      const Vec3 p_minus_o = sub(m.positions[v], o);
+      for (std::uint32_t k = m.rings.begin(v); k < m.rings.end(v); ++k) {
+        const Vec3 edge = sub(m.positions[m.rings.source[k]], m.positions[v]);
+        const double along = dot(edge, p_minus_o);
+        if (v != v0 && !(strict ? along > 0.0 : along >= 0.0)) continue;
+        on_edge(v, k, edge);
+      }
+    }
+    std::swap(scratch.pending, scratch.next);
+  }
 }
 
 }  // namespace qm3d::mesh::detail

@@ -2,6 +2,8 @@
 // (MEPP2 process_cmdm_per_vertex, SPEC-CMDM 1.7), turned into weighted paired samples. Internal.
 #pragma once
 
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "halfedge_mesh.h"
@@ -35,8 +37,35 @@ bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v);
 /// Fills `out` with the samples of vertex v0's neighbourhood: v0 itself, every vertex reached
 /// inside the ball (once), and one interpolated point per edge crossing the sphere, each paired
 /// with its image on the other mesh, with Gaussian weights w1 = G(|P1 - p(v0)|) and
-/// w2 = G(|P2 - q(v0)|).
+/// w2 = G(|P2 - q(v0)|). MEPP2's walk as it is written, one radius at a time; the metrics use
+/// sample_neighbourhoods, which gives the same samples (in another order), and the tests check
+/// one against the other.
 void sample_neighbourhood(const MatchedFields& fields, std::uint32_t v0, const WalkParameters& walk,
                           WalkScratch& scratch, NeighbourhoodSamples& out);
+
+/// WalkScratch plus the edges that crossed the sphere at the current radius, to be tested again
+/// at the next one.
+struct MultiWalkScratch : WalkScratch {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pending, next;  ///< (vertex, half-edge)
+};
+
+/// The samples of v0's neighbourhoods at several radii in one walk: out[j] holds exactly the
+/// samples sample_neighbourhood(levels[j], v0, walks[j]) gives (the same values, bit for bit),
+/// in another order. `levels[j]` are the fields at scale j (they differ only by curvature);
+/// `walks[j].radius` must increase with j.
+///
+/// Why one walk serves every radius: a vertex is entered at radius r iff some chain of outward
+/// edges from v0 reaches it with every edge's far end inside (sphere_clip_vector_cmdm false),
+/// and that test is monotone in r for a given edge (a larger r lowers c = |w|^2 - r^2, which
+/// raises delta and t, and every IEEE operation involved is monotone). So the ball at r_j is the
+/// ball at r_{j-1} grown from the edges that crossed at r_{j-1}: those are tested again at r_j,
+/// every other edge once, at the radius at which its vertex was entered. An entered vertex's
+/// sample goes into every level from its entry level on; a crossing at r_j gives a sample at
+/// level j only. The sample order, v0 first and then as found, is not MEPP2's depth-first order
+/// at each radius, so sums over the samples may differ by rounding (the numeric contract,
+/// DEVELOPERS.md).
+void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32_t v0,
+                           const std::vector<WalkParameters>& walks, MultiWalkScratch& scratch,
+                           std::vector<NeighbourhoodSamples>& out);
 
 }  // namespace qm3d::mesh::detail

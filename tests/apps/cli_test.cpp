@@ -252,7 +252,7 @@ TEST_F(Cli, ProgressGoesToStderrOnlyWhenAskedOffATerminal) {
   ASSERT_EQ(asked.code, 0) << asked.err;
   EXPECT_EQ(asked.out, plain.out);  // the result is untouched
   EXPECT_NE(asked.err.find("qm3d: CMDM:   0%  connectivity"), std::string::npos) << asked.err;
-  EXPECT_NE(asked.err.find("qm3d: CMDM:  89%  ref→dist: scale 3/3"), std::string::npos) << asked.err;
+  EXPECT_NE(asked.err.find("qm3d: CMDM:  80%  ref→dist: neighbourhoods, scales 1-3"), std::string::npos) << asked.err;
   EXPECT_NE(asked.err.find("qm3d: CMDM: 100%  done"), std::string::npos) << asked.err;
   EXPECT_EQ(qm3d("cmdm " + pair + " --progress --quiet").err, "");
   const CliRun compare = qm3d("compare " + pair + " --progress");
@@ -277,7 +277,7 @@ TEST_F(Cli, ProgressLineOnATerminalIsErasedBeforeTheResultOrAnError) {
   const std::string erase = "\r\033[K";
   const auto [ok_code, ok] = on_terminal("msdm2 " + cmdm_file("blob4_ref.off") + " " + cmdm_file("blob4_geonoise.off"));
   ASSERT_EQ(ok_code, 0) << ok;
-  EXPECT_NE(ok.find("\rMSDM2:  40%  dist→ref: scale 1/3"), std::string::npos) << ok;
+  EXPECT_NE(ok.find("\rMSDM2:  25%  dist→ref: curvature, scale 1/3"), std::string::npos) << ok;
   ASSERT_NE(ok.rfind(erase), std::string::npos) << ok;
   EXPECT_EQ(ok.substr(ok.rfind(erase) + erase.size()), "MSDM2 = 0.494504  (dist→ref)\r\n");
 
