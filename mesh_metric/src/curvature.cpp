@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <stdexcept>
 
 #include "vec3_ops.h"
 #include "walk_scratch.h"
@@ -13,6 +15,10 @@ namespace qm3d::mesh::detail {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+struct Tensor {
+  double t[3][3];
+};
 
 void add_edge_tensor(double tensor[3][3], const Vec3& vec, double coeff) {
   for (int i = 0; i < 3; ++i) {
@@ -46,6 +52,45 @@ bool vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, CurvatureV
     for (int j = 0; j < 3; ++j) tensor[i][j] /= area;
   }
   return valid;
+}
+
+// The tensors of vertex v0 at each of `radii` (increasing) in one walk (walk_outward_levels):
+// tensors[j] and valid[j] are what vertex_tensor gives at radii[j] alone, summed in another order.
+// An edge that crosses the sphere at level j contributes (clipped) at that level only; an edge
+// inside at level j contributes its whole vector at every level from j on (kGeneric), gathered
+// in `inside`.
+void vertex_tensors(const HalfedgeMesh& m, std::uint32_t v0, const std::vector<double>& radii,
+                    CurvatureVariant variant, MultiWalkScratch& scratch, Tensor* tensors,
+                    bool* valid) {
+  const Vec3& o = m.positions[v0];
+  const bool generic = variant == CurvatureVariant::kGeneric;
+  Tensor inside{}, crossing{};
+  bool inside_valid = true, crossing_valid = true;
+  walk_outward_levels(
+      m, v0, generic, radii.size(), scratch,
+      [&](std::size_t level, std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
+        const bool isect = sphere_clip_vector(o, radii[level], m.positions[v], vec);
+        if (!isect) scratch.enter(w);
+        if (!isect && !generic) return false;  // CMDM: only crossing edges contribute
+        Tensor& tensor = isect ? crossing : inside;
+        const double beta = m.rings.dihedral[k];
+        if (beta == kVoidsTensor) {
+          (isect ? crossing_valid : inside_valid) = false;
+        } else if (!std::isnan(beta)) {  // NaN: kNoContribution
+          const double len = norm(vec);
+          if (len > 0) add_edge_tensor(tensor.t, vec, beta / len);
+        }
+        return isect;
+      },
+      [&](std::size_t level) {
+        const double area = kPi * radii[level] * radii[level];
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) tensors[level].t[i][j] = (inside.t[i][j] + crossing.t[i][j]) / area;
+        }
+        valid[level] = inside_valid && crossing_valid;
+        crossing = Tensor{};
+        crossing_valid = true;
+      });
 }
 
 // maxdim * (|l0| + |l1|) / 2 with l0, l1 the eigenvalues of largest magnitude.
@@ -118,6 +163,33 @@ std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius,
     }
   }
   return curvature;
+}
+
+std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
+                                                      const std::vector<double>& radii,
+                                                      double maxdim, CurvatureVariant variant,
+                                                      int threads) {
+  if (!std::is_sorted(radii.begin(), radii.end())) {
+    throw std::invalid_argument("processed_curvatures: the radii must not decrease");
+  }
+  const auto n = static_cast<std::int64_t>(mesh.positions.size());
+  std::vector<std::vector<double>> curvatures(radii.size(), std::vector<double>(mesh.positions.size()));
+#pragma omp parallel num_threads(threads)
+  {
+    MultiWalkScratch scratch;
+    std::vector<Tensor> tensors(radii.size());
+    std::unique_ptr<bool[]> valid(new bool[radii.size()]);
+#pragma omp for schedule(dynamic, 512)
+    for (std::int64_t v = 0; v < n; ++v) {
+      vertex_tensors(mesh, static_cast<std::uint32_t>(v), radii, variant, scratch, tensors.data(),
+                     valid.get());
+      // A void tensor: as processed_curvature.
+      for (std::size_t j = 0; j < radii.size(); ++j) {
+        curvatures[j][v] = valid[j] ? post_process(tensors[j].t, maxdim) : 0.0;
+      }
+    }
+  }
+  return curvatures;
 }
 
 }  // namespace qm3d::mesh::detail

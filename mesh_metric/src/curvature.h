@@ -26,6 +26,16 @@ enum class CurvatureVariant {
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
                                         CurvatureVariant variant, int threads);
 
+/// processed_curvature at each of `radii` (which must not decrease), from one walk per vertex
+/// (walk_outward_levels): the same edges contribute at each radius as in a walk at that radius
+/// alone, summed in another order, so the values may differ from processed_curvature's by
+/// rounding. MEPP2's walks are written one radius at a time; the metrics use this one, and the
+/// tests check one against the other.
+std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
+                                                      const std::vector<double>& radii,
+                                                      double maxdim, CurvatureVariant variant,
+                                                      int threads);
+
 /// The absolute epsilon of MEPP2's sphere_clip_vector: an edge vector whose squared length is
 /// below it is taken as inside the sphere, whatever the radius (MEPP2 commit d977d05,
 /// FEVV/Operators/Geometry/ClippingAndIntersection.hpp, `fabs(a) < epsilon` on a = v . v; the

@@ -97,20 +97,30 @@ std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
   return out;
 }
 
-// Processed curvature of a mesh at one radius, remembered for the other direction when both
+// Processed curvatures of a mesh at several radii, remembered for the other direction when both
 // directions use the same radii (same bounding-box size, e.g. colour-only distortions).
 class CurvatureCache {
  public:
   CurvatureCache(CurvatureVariant variant, bool reuse, int threads)
       : variant_(variant), reuse_(reuse), threads_(threads) {}
 
-  /// The curvature of `mesh` at `radius`; the reference stays valid until release(mesh).
-  const std::vector<double>& get(const HalfedgeMesh& mesh, double radius, double maxdim) {
-    for (const Entry& e : entries_) {
-      if (e.mesh == &mesh && e.radius == radius && e.maxdim == maxdim) return e.values;
+  /// The curvature of `mesh` at each of `radii` (increasing), those not yet known computed in
+  /// one walk per vertex; the references stay valid until release(mesh).
+  std::vector<const std::vector<double>*> get(const HalfedgeMesh& mesh,
+                                              const std::vector<double>& radii, double maxdim) {
+    std::vector<double> missing;
+    for (double r : radii) {
+      if (!find(mesh, r, maxdim)) missing.push_back(r);
     }
-    entries_.push_back({&mesh, radius, maxdim, processed_curvature(mesh, radius, maxdim, variant_, threads_)});
-    return entries_.back().values;
+    if (!missing.empty()) {
+      auto values = processed_curvatures(mesh, missing, maxdim, variant_, threads_);
+      for (std::size_t j = 0; j < missing.size(); ++j) {
+        entries_.push_back({&mesh, missing[j], maxdim, std::move(values[j])});
+      }
+    }
+    std::vector<const std::vector<double>*> out;
+    for (double r : radii) out.push_back(find(mesh, r, maxdim));
+    return out;
   }
   /// Frees `mesh`'s curvatures unless the other direction will use them (a list: erasing keeps
   /// the references to the other entries valid).
@@ -124,6 +134,12 @@ class CurvatureCache {
     double radius, maxdim;
     std::vector<double> values;
   };
+  const std::vector<double>* find(const HalfedgeMesh& mesh, double radius, double maxdim) const {
+    for (const Entry& e : entries_) {
+      if (e.mesh == &mesh && e.radius == radius && e.maxdim == maxdim) return &e.values;
+    }
+    return nullptr;
+  }
   CurvatureVariant variant_;
   bool reuse_;
   int threads_;
@@ -167,33 +183,36 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
   std::vector<Lab> lab_match;
   if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab);
   const double maxdim = iterated.box_size;
-  const std::string of_scales = "/" + std::to_string(scales);
   std::vector<FeatureVector> sums(iterated.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
   for (int first = 0; first < scales; first += kScalesPerWalk) {
     const int end = std::min(scales, first + kScalesPerWalk);
-    std::vector<std::vector<double>> curv_match;
-    std::vector<MatchedFields> levels;
-    std::vector<WalkParameters> walks;
-    curv_match.reserve(end - first);  // `levels` points into it
-    for (int level = first; level < end; ++level) {
-      progress.begin(label + ": curvature, scale " + std::to_string(level + 1) + of_scales);
-      const auto& curv1 = curvatures.get(iterated.mesh, maxdim * rc, maxdim);
-      curv_match.push_back(
-          interpolate_all(matches, other.mesh, curvatures.get(other.mesh, maxdim * rc, maxdim)));
-      curvatures.release(other.mesh);
-      levels.push_back({&iterated.mesh, &matched_point, &curv1, &curv_match.back(),
-                        def.uses_color ? &iterated.lab : nullptr,
-                        def.uses_color ? &lab_match : nullptr});
-      const double h = rc * def.neighbourhood_factor * maxdim;
-      walks.push_back({h, h / def.sigma_divisor, def.strict_outward_test});
-      rc += def.radius_step;
-    }
-    // "neighbourhoods, scales 1-3", or "scales 9-16 of 20" when one walk cannot serve them all.
+    // "scales 1-3", or "scales 9-16 of 20" when one walk cannot serve them all.
     std::string which = end - first == 1 ? "scale " + std::to_string(end)
                                          : "scales " + std::to_string(first + 1) + "-" +
                                                std::to_string(end);
     if (end - first < scales) which += " of " + std::to_string(scales);
+    std::vector<double> radii;
+    std::vector<WalkParameters> walks;
+    for (int level = first; level < end; ++level) {
+      radii.push_back(maxdim * rc);
+      const double h = rc * def.neighbourhood_factor * maxdim;
+      walks.push_back({h, h / def.sigma_divisor, def.strict_outward_test});
+      rc += def.radius_step;
+    }
+    progress.begin(label + ": curvature, " + which, end - first);
+    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim);
+    std::vector<std::vector<double>> curv_match;
+    for (const auto* c : curvatures.get(other.mesh, radii, maxdim)) {
+      curv_match.push_back(interpolate_all(matches, other.mesh, *c));
+    }
+    curvatures.release(other.mesh);
+    std::vector<MatchedFields> levels;
+    for (int j = 0; j < end - first; ++j) {
+      levels.push_back({&iterated.mesh, &matched_point, curv1[j], &curv_match[j],
+                        def.uses_color ? &iterated.lab : nullptr,
+                        def.uses_color ? &lab_match : nullptr});
+    }
     progress.begin(label + ": neighbourhoods, " + which, end - first);
     accumulate_scales(levels, walks, def.conventions, sums, threads);
     curvatures.release(iterated.mesh);

@@ -141,10 +141,6 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
                });
 }
 
-}  // namespace qm3d::mesh::detail
-
-namespace qm3d::mesh::detail {
-
 void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32_t v0,
                            const std::vector<WalkParameters>& walks, MultiWalkScratch& scratch,
                            std::vector<NeighbourhoodSamples>& out) {
@@ -156,45 +152,23 @@ void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32
   const Vec3& q0 = (*f.matched_point)[v0];
   out.resize(levels.size());
   for (NeighbourhoodSamples& s : out) s.clear();
-  scratch.start(m.positions.size());
-  scratch.pending.clear();
-  scratch.enter(v0);
   push_vertex_levels(levels, 0, v0, o, q0, walks, with_color, out);
-  for (std::size_t level = 0; level < levels.size(); ++level) {
-    const double r = walks[level].radius;
-    const bool last = level + 1 == levels.size();
-    scratch.next.clear();
-    // Edge k = (w -> v), outward from v0: a crossing sample at this level (and tested again at
-    // the next), or w entered here (when it was not already).
-    const auto on_edge = [&](std::uint32_t v, std::uint32_t k, const Vec3& edge) {
-      const std::uint32_t w = m.rings.source[k];
-      Vec3 vec = edge;
-      if (!sphere_clip_vector_cmdm(o, r, m.positions[v], vec)) {
-        if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, walks, with_color, out);
-        return;
-      }
-      const MatchedFields& here = levels[level];
-      const Sample s = dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, edge)
-                                            : vertex_sample(here, w);
-      push_sample(s, o, q0, walks[level].sigma, with_color, out[level]);
-      if (!last) scratch.next.emplace_back(v, k);
-    };
-    for (const auto& [v, k] : scratch.pending) {
-      on_edge(v, k, sub(m.positions[m.rings.source[k]], m.positions[v]));
-    }
-    while (!scratch.stack.empty()) {
-      const std::uint32_t v = scratch.stack.back();
-      scratch.stack.pop_back();
-      const Vec3 p_minus_o = sub(m.positions[v], o);
-      for (std::uint32_t k = m.rings.begin(v); k < m.rings.end(v); ++k) {
-        const Vec3 edge = sub(m.positions[m.rings.source[k]], m.positions[v]);
-        const double along = dot(edge, p_minus_o);
-        if (v != v0 && !(strict ? along > 0.0 : along >= 0.0)) continue;
-        on_edge(v, k, edge);
-      }
-    }
-    std::swap(scratch.pending, scratch.next);
-  }
+  walk_outward_levels(
+      m, v0, strict, levels.size(), scratch,
+      [&](std::size_t level, std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
+        Vec3 vec = edge;
+        if (!sphere_clip_vector_cmdm(o, walks[level].radius, m.positions[v], vec)) {
+          if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, walks, with_color, out);
+          return false;
+        }
+        // A crossing: a sample at this level only (a zero-length edge gives w's vertex sample).
+        const MatchedFields& here = levels[level];
+        const Sample s = dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, edge)
+                                              : vertex_sample(here, w);
+        push_sample(s, o, q0, walks[level].sigma, with_color, out[level]);
+        return true;
+      },
+      [](std::size_t) {});
 }
 
 }  // namespace qm3d::mesh::detail

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "halfedge_mesh.h"
@@ -43,26 +42,15 @@ bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v);
 void sample_neighbourhood(const MatchedFields& fields, std::uint32_t v0, const WalkParameters& walk,
                           WalkScratch& scratch, NeighbourhoodSamples& out);
 
-/// WalkScratch plus the edges that crossed the sphere at the current radius, to be tested again
-/// at the next one.
-struct MultiWalkScratch : WalkScratch {
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pending, next;  ///< (vertex, half-edge)
-};
-
 /// The samples of v0's neighbourhoods at several radii in one walk: out[j] holds exactly the
 /// samples sample_neighbourhood(levels[j], v0, walks[j]) gives (the same values, bit for bit),
 /// in another order. `levels[j]` are the fields at scale j (they differ only by curvature);
 /// `walks[j].radius` must increase with j.
 ///
-/// Why one walk serves every radius: a vertex is entered at radius r iff some chain of outward
-/// edges from v0 reaches it with every edge's far end inside (sphere_clip_vector_cmdm false),
-/// and that test is monotone in r for a given edge (a larger r lowers c = |w|^2 - r^2, which
-/// raises delta and t, and every IEEE operation involved is monotone). So the ball at r_j is the
-/// ball at r_{j-1} grown from the edges that crossed at r_{j-1}: those are tested again at r_j,
-/// every other edge once, at the radius at which its vertex was entered. An entered vertex's
-/// sample goes into every level from its entry level on; a crossing at r_j gives a sample at
-/// level j only. The sample order, v0 first and then as found, is not MEPP2's depth-first order
-/// at each radius, so sums over the samples may differ by rounding (the numeric contract,
+/// One walk serves every radius (walk_outward_levels says why): an entered vertex's sample goes
+/// into every level from its entry level on; a crossing at r_j gives a sample at level j only.
+/// The sample order, v0 first and then as found, is not MEPP2's depth-first order at each
+/// radius, so sums over the samples may differ by rounding (the numeric contract,
 /// DEVELOPERS.md).
 void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32_t v0,
                            const std::vector<WalkParameters>& walks, MultiWalkScratch& scratch,
