@@ -201,12 +201,13 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
       rc += def.radius_step;
     }
     progress.begin(label + ": curvature, " + which, end - first);
-    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim);
+    // The other mesh's first: only their values at the matched points are kept.
     std::vector<std::vector<double>> curv_match;
     for (const auto* c : curvatures.get(other.mesh, radii, maxdim)) {
       curv_match.push_back(interpolate_all(matches, other.mesh, *c));
     }
     curvatures.release(other.mesh);
+    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim);
     std::vector<MatchedFields> levels;
     for (int j = 0; j < end - first; ++j) {
       levels.push_back({&iterated.mesh, &matched_point, curv1[j], &curv_match[j],
