@@ -15,6 +15,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/large_arrays.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/texture.h"
 #include "qm3d/render/image_quality.h"
@@ -43,6 +44,7 @@ GreyImage luma_image(const View& v) {
   GreyImage g;
   g.width = v.width;
   g.height = v.height;
+  reserve_with_huge_pages(g.values, static_cast<std::size_t>(v.width) * v.height);
   g.values.resize(static_cast<std::size_t>(v.width) * v.height);
   for (std::size_t i = 0; i < g.values.size(); ++i) {
     g.values[i] = yuv_of(v.rgba[i * 4], v.rgba[i * 4 + 1], v.rgba[i * 4 + 2])[0];

@@ -8,6 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "qm3d/common/large_arrays.h"
+
 namespace qm3d::render {
 namespace {
 
@@ -213,6 +215,7 @@ GreyImage halve(const GreyImage& in) {
   GreyImage out;
   out.width = in.width / 2;
   out.height = in.height / 2;
+  reserve_with_huge_pages(out.values, static_cast<std::size_t>(out.width) * out.height);
   out.values.resize(static_cast<std::size_t>(out.width) * out.height);
   for (int y = 0; y < out.height; ++y) {
     for (int x = 0; x < out.width; ++x) {
@@ -252,21 +255,28 @@ double masked_ssim(const GreyImage& a, const GreyImage& b, const std::vector<std
 
 namespace {
 
-/// MS-SSIM given the mean cs of scale 0 (NaN for an empty mask).
-double ms_ssim_from(GreyImage sa, GreyImage sb, std::vector<std::uint8_t> m, double cs0) {
+/// MS-SSIM given the mean cs of scale 0 (NaN for an empty mask); the full-scale images are read
+/// where they are, each smaller scale made from the previous one.
+double ms_ssim_from(const GreyImage& a, const GreyImage& b, const std::vector<std::uint8_t>& mask,
+                    double cs0) {
+  GreyImage sa, sb;
+  std::vector<std::uint8_t> m;
+  const GreyImage *pa = &a, *pb = &b;
+  const std::vector<std::uint8_t>* pm = &mask;
   double product = 1;
   for (int j = 0; j < kMsSsimScales; ++j) {
-    const double cs = j == 0 ? cs0 : masked_mean(sa, sb, m, contrast_structure_term);
+    const double cs = j == 0 ? cs0 : masked_mean(*pa, *pb, *pm, contrast_structure_term);
     if (std::isnan(cs)) return cs;
     product *= std::pow(std::max(cs, 0.0), kMsSsimWeights[j]);
     if (j == kMsSsimScales - 1) {
-      const double l = masked_mean(sa, sb, m, luminance_term);
+      const double l = masked_mean(*pa, *pb, *pm, luminance_term);
       product *= std::pow(std::max(l, 0.0), kMsSsimWeights[j]);
       break;
     }
-    m = halve_mask(m, sa.width, sa.height);
-    sa = halve(sa);
-    sb = halve(sb);
+    m = halve_mask(*pm, pa->width, pa->height);
+    sa = halve(*pa);
+    sb = halve(*pb);
+    pa = &sa, pb = &sb, pm = &m;
   }
   return product;
 }

@@ -17,6 +17,7 @@
 
 #include "float_ops.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/large_arrays.h"
 
 namespace qm3d::render {
 
@@ -609,6 +610,8 @@ View render_view(const RenderModel& model, const Frame& frame, const Float3& dir
   View v;
   v.width = v.height = options.resolution;
   const std::size_t n = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
+  reserve_with_huge_pages(v.rgba, n * 4);
+  reserve_with_huge_pages(v.depth, n);
   v.rgba.assign(n * 4, 0);
   v.depth.assign(n, -FLT_MAX);  // RendererSw's clear depth
   const Camera cam = camera_for(frame, f3(direction), v.width, v.height);
