@@ -83,9 +83,38 @@ FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConvent
 
 FeatureVector local_features_and_similarities(const NeighbourhoodSamples& s,
                                               const FeatureConventions& conv) {
-  FeatureVector f = curvature_features(s, conv);
-  const FeatureVector sim = color_similarities(s, conv);
-  for (std::size_t k = 3; k < kNumFeatures; ++k) f[k] = sim[k];
+  // curvature_features and color_similarities with every first-moment sum taken in one pass
+  // over the samples (the sums of w1 and w2 once instead of four times): each sum accumulates
+  // the same terms in the same order, so the values are theirs, bit for bit.
+  double sw1 = 0, sw2 = 0, c1 = 0, c2 = 0, l1 = 0, l2 = 0, ch1 = 0, ch2 = 0, hue = 0;
+  for (std::size_t i = 0; i < s.w1.size(); ++i) {
+    const double w1 = s.w1[i], w2 = s.w2[i];
+    sw1 += w1;
+    sw2 += w2;
+    c1 += s.curv1[i] * w1;
+    c2 += s.curv2[i] * w2;
+    l1 += s.light1[i] * w1;
+    l2 += s.light2[i] * w2;
+    ch1 += s.chroma1[i] * w1;
+    ch2 += s.chroma2[i] * w2;
+    hue += s.hue_diff[i] * w1;
+  }
+  const PairedMoments curv = weighted_moments_from_sums(s.curv1, s.curv2, s.w1, s.w2, sw1, sw2, c1,
+                                                        c2, conv.curvature_covariance);
+  FeatureVector f{};
+  f[0] = curvature_comparison(curv.mean1, curv.mean2);
+  f[1] = curvature_contrast(curv.sd1, curv.sd2);
+  f[2] = curvature_structure(curv.sd1, curv.sd2, curv.cov12);
+  if (conv.cap_curvature_structure) f[2] = std::min(f[2], 1.0);
+  const PairedMoments light = weighted_moments_from_sums(s.light1, s.light2, s.w1, s.w2, sw1, sw2,
+                                                         l1, l2, conv.lightness_covariance);
+  const PairedMoments structure =
+      conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
+  f[3] = lightness_similarity(light.mean1, light.mean2);
+  f[4] = lightness_contrast_similarity(light.sd1, light.sd2);
+  f[5] = lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
+  f[6] = chroma_similarity(ch1 / sw1, ch2 / sw2);
+  f[7] = hue_similarity(hue / sw1);
   return f;
 }
 

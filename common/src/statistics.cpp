@@ -30,6 +30,15 @@ PairedMoments weighted_moments(const std::vector<double>& x1, const std::vector<
     sum_x1 += x1[i] * w1[i];
     sum_x2 += x2[i] * w2[i];
   }
+  return weighted_moments_from_sums(x1, x2, w1, w2, sum_w1, sum_w2, sum_x1, sum_x2, convention);
+}
+
+PairedMoments weighted_moments_from_sums(const std::vector<double>& x1,
+                                         const std::vector<double>& x2,
+                                         const std::vector<double>& w1,
+                                         const std::vector<double>& w2, double sum_w1,
+                                         double sum_w2, double sum_x1, double sum_x2,
+                                         const CovarianceConvention& convention) {
   PairedMoments m;
   m.mean1 = sum_x1 / sum_w1;
   m.mean2 = sum_x2 / sum_w2;

@@ -43,6 +43,15 @@ PairedMoments weighted_moments(const std::vector<double>& x1, const std::vector<
                                const std::vector<double>& w1, const std::vector<double>& w2,
                                const CovarianceConvention& convention);
 
+/// weighted_moments given its first pass: the sums of w1, w2, x1 w1 and x2 w2 (each accumulated
+/// in sample order, as weighted_moments does). The same values, bit for bit.
+PairedMoments weighted_moments_from_sums(const std::vector<double>& x1,
+                                         const std::vector<double>& x2,
+                                         const std::vector<double>& w1,
+                                         const std::vector<double>& w2, double sum_w1,
+                                         double sum_w2, double sum_x1, double sum_x2,
+                                         const CovarianceConvention& convention);
+
 /// Unweighted moments (divide by n), covariance not clamped: PCQM's lightness structure.
 PairedMoments unweighted_moments(const std::vector<double>& x1, const std::vector<double>& x2);
 
