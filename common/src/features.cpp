@@ -47,8 +47,10 @@ void NeighbourhoodSamples::clear() {
   }
 }
 
-FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
-  const PairedMoments m = weighted_moments(s.curv1, s.curv2, s.w1, s.w2, conv.curvature_covariance);
+namespace {
+
+// f1..f3 from the curvature moments.
+FeatureVector curvature_features_of(const PairedMoments& m, const FeatureConventions& conv) {
   FeatureVector f{};
   f[0] = curvature_comparison(m.mean1, m.mean2);
   f[1] = curvature_contrast(m.sd1, m.sd2);
@@ -57,17 +59,32 @@ FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureCon
   return f;
 }
 
-FeatureVector color_similarities(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
-  const PairedMoments light =
-      weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance);
+// s4..s8 into `sim` from the lightness moments and the weighted means of chroma and hue.
+void color_similarities_of(const NeighbourhoodSamples& s, const FeatureConventions& conv,
+                           const PairedMoments& light, double chroma_mean1, double chroma_mean2,
+                           double hue_mean, FeatureVector& sim) {
   const PairedMoments structure =
       conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
-  FeatureVector sim{};
   sim[3] = lightness_similarity(light.mean1, light.mean2);
   sim[4] = lightness_contrast_similarity(light.sd1, light.sd2);
   sim[5] = lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
-  sim[6] = chroma_similarity(weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2));
-  sim[7] = hue_similarity(weighted_mean(s.hue_diff, s.w1));
+  sim[6] = chroma_similarity(chroma_mean1, chroma_mean2);
+  sim[7] = hue_similarity(hue_mean);
+}
+
+}  // namespace
+
+FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  return curvature_features_of(
+      weighted_moments(s.curv1, s.curv2, s.w1, s.w2, conv.curvature_covariance), conv);
+}
+
+FeatureVector color_similarities(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
+  FeatureVector sim{};
+  color_similarities_of(s, conv,
+                        weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance),
+                        weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2),
+                        weighted_mean(s.hue_diff, s.w1), sim);
   return sim;
 }
 
@@ -99,22 +116,14 @@ FeatureVector local_features_and_similarities(const NeighbourhoodSamples& s,
     ch2 += s.chroma2[i] * w2;
     hue += s.hue_diff[i] * w1;
   }
-  const PairedMoments curv = weighted_moments_from_sums(s.curv1, s.curv2, s.w1, s.w2, sw1, sw2, c1,
-                                                        c2, conv.curvature_covariance);
-  FeatureVector f{};
-  f[0] = curvature_comparison(curv.mean1, curv.mean2);
-  f[1] = curvature_contrast(curv.sd1, curv.sd2);
-  f[2] = curvature_structure(curv.sd1, curv.sd2, curv.cov12);
-  if (conv.cap_curvature_structure) f[2] = std::min(f[2], 1.0);
-  const PairedMoments light = weighted_moments_from_sums(s.light1, s.light2, s.w1, s.w2, sw1, sw2,
-                                                         l1, l2, conv.lightness_covariance);
-  const PairedMoments structure =
-      conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
-  f[3] = lightness_similarity(light.mean1, light.mean2);
-  f[4] = lightness_contrast_similarity(light.sd1, light.sd2);
-  f[5] = lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
-  f[6] = chroma_similarity(ch1 / sw1, ch2 / sw2);
-  f[7] = hue_similarity(hue / sw1);
+  FeatureVector f = curvature_features_of(
+      weighted_moments_from_sums(s.curv1, s.curv2, s.w1, s.w2, sw1, sw2, c1, c2,
+                                 conv.curvature_covariance),
+      conv);
+  color_similarities_of(s, conv,
+                        weighted_moments_from_sums(s.light1, s.light2, s.w1, s.w2, sw1, sw2, l1,
+                                                   l2, conv.lightness_covariance),
+                        ch1 / sw1, ch2 / sw2, hue / sw1, f);
   return f;
 }
 
