@@ -8,6 +8,8 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "disposable_inputs.h"
 #include "qm3d/common/error.h"
@@ -217,6 +219,36 @@ TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
   o.direction = Direction::kDistToRef;
   compute_cmdm(r, d, o);
   expect_sound_progress(calls, "dist→ref: closest points");
+}
+
+// More scales than one walk serves (8): the walks come in chunks, "scales 1-8 of 10" then
+// "scales 9-10 of 10", the radii going on growing across the chunk; the 9th and 10th scales
+// count (the score is not the 8 scales' one) and the result does not depend on the threads.
+TEST(Cmdm, MoreScalesThanOneWalkServesComeInChunks) {
+  const auto r = read_mesh(cmdm_dir() / "blob4_ref.off").mesh;
+  const auto d = read_mesh(cmdm_dir() / "blob4_bothnoise.off").mesh;
+  test::ProgressRecorder recorder;
+  CmdmOptions o;
+  o.scales = 10;
+  o.threads = 2;
+  o.direction = Direction::kDistToRef;
+  o.progress = recorder.callback();
+  const MetricResult ten = compute_cmdm(r, d, o);
+  std::vector<std::string> stages;
+  for (const auto& call : recorder.calls) stages.push_back(call.first);
+  EXPECT_EQ(stages, (std::vector<std::string>{"connectivity", "dist→ref: closest points",
+                                              "dist→ref: curvature, scales 1-8 of 10",
+                                              "dist→ref: neighbourhoods, scales 1-8 of 10",
+                                              "dist→ref: curvature, scales 9-10 of 10",
+                                              "dist→ref: neighbourhoods, scales 9-10 of 10",
+                                              "done"}));
+  ASSERT_TRUE(std::isfinite(ten.score));
+  o.progress = nullptr;
+  o.scales = 8;
+  EXPECT_NE(compute_cmdm(r, d, o).score, ten.score);
+  o.scales = 10;
+  o.threads = 1;
+  EXPECT_EQ(compute_cmdm(r, d, o).score, ten.score);
 }
 
 // The caller may free both meshes once inputs_done is called: the metric reads them no more
