@@ -293,7 +293,13 @@ def _thread_count(threads):
 
 def _finite(name, value):
     # JSON has no NaN or infinity: a non-finite option is refused here, as the tool refuses it.
-    value = float(value)
+    # A string or a flag is not a number, even when it reads as one.
+    if isinstance(value, (str, bytes, bool, _np.bool_)):
+        raise ValueError(f"{name}: expected a number, got {value!r}")
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a number, got {value!r}") from None
     if not _math.isfinite(value):
         raise ValueError(f"{name}: expected a finite number, got {value!r}")
     return value
@@ -584,7 +590,7 @@ def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="
     return {"views": result, "frame": {"center": list(centre), "radius": radius}}
 
 
-def _finite(name, a):
+def _finite_array(name, a):
     if not _np.all(_np.isfinite(a)):
         raise ValueError(f"{name}: NaN or infinite values")
     return a
@@ -620,13 +626,13 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
         c0, thr, thr_prctile, se_ds, se_bw, different, similar} or None}}, krasula {rule, pairs,
         different, better, similar} or None, comparisons [{a, b, test, statistic, p}].
     """
-    m = _finite("mos", _np.asarray(mos, dtype=float).ravel())
-    c = _finite("ci95", _np.asarray(ci95 if ci95 is not None else [], dtype=float).ravel())
+    m = _finite_array("mos", _np.asarray(mos, dtype=float).ravel())
+    c = _finite_array("ci95", _np.asarray(ci95 if ci95 is not None else [], dtype=float).ravel())
     if c.size not in (0, m.size):
         raise ValueError(f"ci95: {c.size} values for {m.size} stimuli")
     several = isinstance(scores, dict) or hasattr(scores, "columns")
     if not several and sd is None and raw is None and pairs is None:
-        s = _finite("scores", _np.asarray(scores, dtype=float).ravel())
+        s = _finite_array("scores", _np.asarray(scores, dtype=float).ravel())
         if s.size != m.size:
             raise ValueError(f"scores and mos: {s.size} scores but {m.size} MOS values")
         return _json.loads(_qm3d.evaluate(s.tolist(), m.tolist(), c.tolist(), int(bootstrap),
@@ -636,7 +642,7 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
     names = [str(k) for k in scores.keys()] if isinstance(scores, dict) else [str(k) for k in scores.columns]
     series = []
     for name in names:
-        s = _finite(f"scores[{name!r}]", _np.asarray(scores[name], dtype=float).ravel())
+        s = _finite_array(f"scores[{name!r}]", _np.asarray(scores[name], dtype=float).ravel())
         if s.size != m.size:
             raise ValueError(f"scores[{name!r}]: {s.size} scores but {m.size} MOS values")
         series.append(s.tolist())
@@ -646,13 +652,13 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
     if sd is not None:
         if n is None:
             raise ValueError("sd needs n (the observer count of each stimulus)")
-        sdv = _finite("sd", _np.asarray(sd, dtype=float).ravel()).tolist()
-        nv = _finite("n", _np.asarray(n, dtype=float).ravel()).tolist()
+        sdv = _finite_array("sd", _np.asarray(sd, dtype=float).ravel()).tolist()
+        nv = _finite_array("n", _np.asarray(n, dtype=float).ravel()).tolist()
         if len(sdv) != m.size or len(nv) != m.size:
             raise ValueError(f"sd and n: one value per stimulus ({m.size}) needed")
         labels = "sd"
     elif raw is not None:
-        rawv = [_finite(f"raw[{i}]", _np.asarray(r, dtype=float).ravel()).tolist() for i, r in enumerate(raw)]
+        rawv = [_finite_array(f"raw[{i}]", _np.asarray(r, dtype=float).ravel()).tolist() for i, r in enumerate(raw)]
         if len(rawv) != m.size:
             raise ValueError(f"raw: {len(rawv)} stimuli for {m.size} MOS values")
         labels = "raw"

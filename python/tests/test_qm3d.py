@@ -194,6 +194,14 @@ def test_bad_files_and_options_raise_typed_errors(tmp_path):
         qm3d.cmdm(MESH_REF, MESH_DIST, scales=0)
     with pytest.raises(ValueError, match="knn: expected an integer"):
         qm3d.pcqm(CLOUD_REF, CLOUD_DIST, knn=2.5)
+    # A string where a number is expected is a ValueError naming the option, for a number, a
+    # list of numbers and the weights alike (a second _finite once shadowed the scalar one).
+    with pytest.raises(ValueError, match="radius: expected a number"):
+        qm3d.pcqm(CLOUD_REF, CLOUD_DIST, radius="0.004")
+    with pytest.raises(ValueError, match="rotation: expected a number"):
+        qm3d.ibsm(CLOUD_REF, CLOUD_DIST, rotation=["x", 0, 0])
+    with pytest.raises(ValueError, match="weights: expected a number"):
+        qm3d.pcqm(CLOUD_REF, CLOUD_DIST, weights=["1"] * 8)
     with pytest.raises(TypeError, match="unexpected keyword argument 'radiuss'"):
         qm3d.pcqm(CLOUD_REF, CLOUD_DIST, radiuss=0.1)
     with pytest.raises(ValueError, match="direction"):
