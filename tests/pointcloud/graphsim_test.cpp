@@ -183,5 +183,96 @@ TEST(Graphsim, SameBitsOnOneAndTwoThreads) {
   }
 }
 
+/// A cloud on a grid of `side` points per axis spaced `step` (z spaced `zstep`), coloured.
+ColoredCloud grid_cloud(int side, double step, double zstep) {
+  ColoredCloud c;
+  for (int x = 0; x < side; ++x) {
+    for (int y = 0; y < side; ++y) {
+      for (int z = 0; z < 2; ++z) {
+        c.positions.push_back({x * step, y * step, z * zstep});
+        c.colors.push_back({x / (side - 1.0), y / (side - 1.0), z * 0.5});
+      }
+    }
+  }
+  return c;
+}
+
+std::string error_of(const std::string& metric, const Input& ref, const Input& dist,
+                     const OptionValues& options) {
+  try {
+    run_metric(registry().get(metric), ref, dist, RunOptions{}, options);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Graphsim, KeypointOutOfRangeNamesTheFile) {
+  const fs::path file = fs::temp_directory_path() / "qm3d_graphsim_bad_keys.txt";
+  std::ofstream(file) << "3\n9048\n";
+  const Input& ref = cloud("smA_ref.ply");
+  const std::string e = error_of("graphsim", ref, ref, {{"keypoint_file", file.string()}});
+  EXPECT_NE(e.find(file.string()), std::string::npos) << e;
+  EXPECT_NE(e.find("line 2"), std::string::npos) << e;
+  EXPECT_NE(e.find("out of range"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  std::ofstream(file) << "3\nseven\n";
+  EXPECT_NE(error_of("msgraphsim", ref, ref, {{"keypoint_file", file.string()}}).find("seven"),
+            std::string::npos);
+  fs::remove(file);
+}
+
+TEST(Graphsim, CloudWithoutColourNamesTheFile) {
+  ColoredCloud plain = grid_cloud(30, 1, 20);
+  plain.colors.clear();
+  const Input ref = Input::from_cloud(grid_cloud(30, 1, 20), "coloured.ply");
+  const Input dist = Input::from_cloud(plain, "plain.ply");
+  const std::string e = error_of("graphsim", ref, dist, {});
+  EXPECT_NE(e.find("plain.ply"), std::string::npos) << e;
+  EXPECT_NE(e.find("colour"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+}
+
+TEST(Graphsim, FlatBoxIsRefusedWithItsCause) {
+  const Input flat = Input::from_cloud(grid_cloud(30, 1, 0), "flat.ply");
+  for (const char* metric : {"graphsim", "msgraphsim"}) {
+    const std::string e = error_of(metric, flat, flat, {});
+    EXPECT_NE(e.find("flat.ply"), std::string::npos) << e;
+    EXPECT_NE(e.find("radius"), std::string::npos) << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  }
+}
+
+TEST(Graphsim, SeededKeypointsAreDeterministic) {
+  const Input& ref = cloud("smA_ref.ply");
+  const Input& dist = cloud("smA_cnoise8.ply");
+  const OptionValues o{{"keypoints", 40}, {"seed", 7}};
+  RunOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const MetricResult a = run_metric(registry().get("graphsim"), ref, dist, one, o);
+  const MetricResult b = run_metric(registry().get("graphsim"), ref, dist, two, o);
+  EXPECT_EQ(a.details.at("keypoint_rows"), b.details.at("keypoint_rows"));
+  EXPECT_EQ(a.score, b.score);
+  EXPECT_EQ(a.details.at("keypoints").get<int>(), 40);
+  EXPECT_GT(a.score, 0.5);
+  EXPECT_LT(a.score, 1.0);
+  // The same keypoints given as a file give the same score.
+  const fs::path file = fs::temp_directory_path() / "qm3d_graphsim_drawn_keys.txt";
+  {
+    std::ofstream out(file);
+    for (const auto& row : a.details.at("keypoint_rows")) out << row.get<std::size_t>() << "\n";
+  }
+  const MetricResult c =
+      run_metric(registry().get("graphsim"), ref, dist, one, {{"keypoint_file", file.string()}});
+  EXPECT_EQ(c.score, a.score);
+  fs::remove(file);
+  // Another seed draws other keypoints; the default count is round(9048 / 10000) = 1.
+  const MetricResult d =
+      run_metric(registry().get("graphsim"), ref, dist, one, {{"keypoints", 40}, {"seed", 8}});
+  EXPECT_NE(d.details.at("keypoint_rows"), a.details.at("keypoint_rows"));
+  EXPECT_EQ(run_metric(registry().get("graphsim"), ref, dist, one, {}).details.at("keypoints"), 1);
+}
+
 }  // namespace
 }  // namespace qm3d
