@@ -45,7 +45,7 @@ constexpr std::uintmax_t kMaxKeypointFileBytes = std::uintmax_t(1) << 30;
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
 void check_cloud(const ColoredCloud& c, const std::string& name, const std::string& metric) {
-  if (c.positions.empty()) throw InputError(name + ": the cloud is empty");
+  if (c.positions.empty()) throw NumericError(name + ": the cloud is empty");
   if (c.colors.size() != c.positions.size()) {
     throw FormatError(name + ": no vertex colours (" + metric +
                       " compares colours: red/green/blue vertex properties needed)");
@@ -78,7 +78,7 @@ double neighbourhood_radius(const std::vector<Vec3>& positions, const std::strin
     std::ostringstream o;
     o << name << ": the neighbourhood radius floor(smallest bounding-box side / 10) is 0 (side "
       << side << "): GraphSIM needs a box at least 10 units on every side (e.g. voxel coordinates)";
-    throw InputError(o.str());
+    throw NumericError(o.str());
   }
   return eps;
 }
@@ -102,9 +102,9 @@ std::vector<std::size_t> read_keypoints(const std::string& file, std::size_t row
     }
     const std::size_t v = std::stoull(item);
     if (v >= rows) {
-      throw InputError(where + "keypoint index " + item + " is out of range (the reference has " +
-                       std::to_string(rows) + " points, indices 0.." + std::to_string(rows - 1) +
-                       ")");
+      throw FormatError(where + "keypoint index " + item + " is out of range (the reference has " +
+                        std::to_string(rows) + " points, indices 0.." + std::to_string(rows - 1) +
+                        ")");
     }
     out.push_back(v);
   }
