@@ -33,20 +33,28 @@ constexpr double kMinWeightSum = 1e-6;            // below: the row keeps its po
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
+/// Neighbours searched beyond K: when the last of them is farther than the K-th, no point tied
+/// with the K-th was left out, and no radius search is needed.
+constexpr std::size_t kSpareNeighbours = 16;
+
 /// The k nearest rows (tree input indices) of `query`, ascending, ties to the lower index.
 std::vector<std::uint32_t> nearest_rows(const KdTree& tree, const std::vector<Vec3>& points,
                                         std::size_t query, std::size_t k,
                                         std::vector<Neighbour>& found) {
-  tree.knn_search(points[query], k, found);
-  const double worst = found.back().distance2;
-  tree.radius_search(points[query], std::nextafter(worst, HUGE_VAL), found);
-  std::vector<std::pair<double, std::uint32_t>> all;
-  all.reserve(found.size());
-  for (const Neighbour& n : found) {
-    const std::uint32_t i = tree.input_index()[n.index];
-    all.emplace_back(squared_distance(points[query], points[i]), i);
+  tree.knn_search(points[query], k + kSpareNeighbours, found);
+  const auto by_row = [&] {
+    std::vector<std::pair<double, std::uint32_t>> all;
+    all.reserve(found.size());
+    for (const Neighbour& n : found) all.emplace_back(n.distance2, tree.input_index()[n.index]);
+    std::sort(all.begin(), all.end());
+    return all;
+  };
+  std::vector<std::pair<double, std::uint32_t>> all = by_row();
+  if (all.size() > k && !(all[k - 1].first < all.back().first)) {
+    // The K-th ties with every spare one: all the points at that distance, by row.
+    tree.radius_search(points[query], std::nextafter(all[k - 1].first, HUGE_VAL), found);
+    all = by_row();
   }
-  std::sort(all.begin(), all.end());
   std::vector<std::uint32_t> out(k);
   for (std::size_t j = 0; j < k; ++j) out[j] = all[j].second;
   return out;
@@ -93,11 +101,16 @@ std::vector<double> variation_scores(const std::vector<Vec3>& z, int threads) {
     for (long i = 0; i < count; ++i) {
       const std::size_t row = static_cast<std::size_t>(i);
       std::vector<double> w(k);
-      double sum = 0;
+      double sum = 0, last_d2 = -1, last_w = 0;
       for (std::size_t j = 1; j < k; ++j) {
-        const double d = std::sqrt(squared_distance(z[row], z[neighbours[row * k + j]]));
-        const double t = d / (r * 0.5);
-        w[j] = std::exp(-(t * t));
+        // Neighbours come by distance: equal distances (shells of a voxel grid) share a weight.
+        const double d2 = squared_distance(z[row], z[neighbours[row * k + j]]);
+        if (d2 != last_d2) {
+          const double t = std::sqrt(d2) / (r * 0.5);
+          last_w = std::exp(-(t * t));
+          last_d2 = d2;
+        }
+        w[j] = last_w;
         sum += w[j];
       }
       if (!(sum > kMinWeightSum)) {
