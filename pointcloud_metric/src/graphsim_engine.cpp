@@ -84,7 +84,12 @@ double graph_radius(const std::vector<Row>& rows) {
     const long j = std::lround(1.0 + i * (static_cast<double>(n - 1) / (kRhoSamples - 1))) - 1;
     if (j == previous) continue;
     previous = j;
-    for (std::size_t t = 0; t < n; ++t) d2[t] = squared_distance(rows[j].p, rows[t].p);
+    std::size_t within = 0;  // rows no farther than the largest so far: s of them, no news
+    for (std::size_t t = 0; t < n; ++t) {
+      d2[t] = squared_distance(rows[j].p, rows[t].p);
+      within += d2[t] <= rho2;
+    }
+    if (within >= s) continue;
     std::nth_element(d2.begin(), d2.begin() + static_cast<long>(s - 1), d2.end());
     rho2 = std::max(rho2, d2[s - 1]);
   }
