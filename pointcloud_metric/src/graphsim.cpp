@@ -40,6 +40,8 @@ constexpr double kPointsPerKeypoint = 10000;
 constexpr double kEpsDivisor = 10;
 /// MS-GraphSIM's code computes 6 scales (n_s picks how many are averaged).
 constexpr int kMaxScales = 6;
+/// More keypoints than any cloud needs (each costs two local graphs).
+constexpr double kMaxKeypoints = 1e8;
 constexpr std::uintmax_t kMaxKeypointFileBytes = std::uintmax_t(1) << 30;
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
@@ -240,26 +242,34 @@ MetricResult run_graphsim(const std::string& metric, bool multiscale, const Inpu
   return result;
 }
 
+/// An option with a lower bound (`exclusive`: the bound itself refused).
+OptionSpec option(const std::string& name, const std::string& help, nlohmann::json value,
+                  double min, bool exclusive = false) {
+  OptionSpec o;
+  o.name = name;
+  o.help = help;
+  o.default_value = std::move(value);
+  o.min = min;
+  o.min_exclusive = exclusive;
+  return o;
+}
+
 std::vector<OptionSpec> common_options() {
-  OptionSpec file{"keypoint_file",
-                  "File of keypoints: 0-based row indices into the reference, one per line (a row "
-                  "given twice counts twice); empty = qm3d's seeded variation-score draw",
-                  ""};
-  OptionSpec count{"keypoints",
-                   "Keypoints drawn when no keypoint file is given (0 = round(points / 10000), at "
-                   "least 1, as the authors' keypoint script)",
-                   0};
-  count.min = 0;
-  OptionSpec seed{"seed", "Seed of the keypoint draw (no keypoint file)", 1};
-  seed.min = 0;
-  OptionSpec threshold{"threshold", "T of the mg / mug similarity (2ab + T) / (a^2 + b^2 + T)",
-                       0.001};
-  threshold.min = 0;
-  threshold.min_exclusive = true;
-  OptionSpec weights{"pooling_weights", "Pooling weights of the L, M, N channels",
-                     nlohmann::json::array({6, 1, 1})};
-  weights.min = 0;
-  return {file, count, seed, threshold, weights};
+  OptionSpec file = option("keypoint_file",
+                           "File of keypoints: 0-based row indices into the reference, one per "
+                           "line (a row given twice counts twice); empty = qm3d's seeded "
+                           "variation-score draw",
+                           "", 0);
+  OptionSpec count = option("keypoints",
+                            "Keypoints drawn when no keypoint file is given (0 = round(points / "
+                            "10000), at least 1, as the authors' keypoint script)",
+                            0, 0);
+  count.max = kMaxKeypoints;
+  return {file, count, option("seed", "Seed of the keypoint draw (no keypoint file)", 1, 0),
+          option("threshold", "T of the mg / mug similarity (2ab + T) / (a^2 + b^2 + T)", 0.001, 0,
+                 true),
+          option("pooling_weights", "Pooling weights of the L, M, N channels",
+                 nlohmann::json::array({6, 1, 1}), 0)};
 }
 
 MetricSpec base_spec(const std::string& name, bool multiscale) {
@@ -302,20 +312,14 @@ MetricSpec msgraphsim_spec() {
   s.summary =
       "MS-GraphSIM (Zhang et al., ACM MM 2021): GraphSIM on graphs blurred and resampled over "
       "scales, the mean of the scale scores (1 = identical); coloured clouds";
-  OptionSpec blur{"blur_ratio", "r_b: the blur graph's radius as a fraction of the graph radius",
-                  0.5};
-  blur.min = 0;
-  blur.min_exclusive = true;
-  OptionSpec sample{"sample_ratio",
-                    "r_s: each scale keeps every other point and shrinks coordinates by 0.5^r_s",
-                    1.0 / 3.0};
-  sample.min = 0;
-  sample.min_exclusive = true;
-  OptionSpec scales{"scales", "n_s: scales averaged (scale 0 = GraphSIM)", 3};
-  scales.min = 1;
+  s.options.push_back(option("blur_ratio",
+                             "r_b: the blur graph's radius as a fraction of the graph radius", 0.5,
+                             0, true));
+  s.options.push_back(option(
+      "sample_ratio", "r_s: each scale keeps every other point and shrinks coordinates by 0.5^r_s",
+      1.0 / 3.0, 0, true));
+  OptionSpec scales = option("scales", "n_s: scales averaged (scale 0 = GraphSIM)", 3, 1);
   scales.max = kMaxScales;
-  s.options.push_back(blur);
-  s.options.push_back(sample);
   s.options.push_back(scales);
   for (int k = 0; k < kMaxScales; ++k) s.value_names.push_back("scale" + std::to_string(k));
   s.quality_value_names = s.value_names;

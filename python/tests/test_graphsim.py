@@ -63,6 +63,18 @@ def test_self_is_exactly_one_and_arrays_score_as_their_files():
     assert from_arrays.score == qm3d.graphsim(ref, dist, keypoint_file=keys).score
 
 
+def test_registered_as_similarities_with_the_tool_options():
+    specs = {m["name"]: m for m in qm3d.metrics()}
+    for name in ("graphsim", "msgraphsim"):
+        assert specs[name]["higher_is_better"]
+        options = {o["name"]: o["default"] for o in specs[name]["options"]}
+        assert options["keypoint_file"] == "" and options["threshold"] == 0.001
+        assert options["pooling_weights"] == [6, 1, 1]
+    assert {o["name"]: o["default"] for o in specs["msgraphsim"]["options"]}["scales"] == 3
+    with pytest.raises(TypeError):
+        qm3d.graphsim("a.ply", "b.ply", scales=3)
+
+
 def test_seeded_keypoints_are_reproducible():
     case = next(c for c in cases() if c["case"] == "smA_cshift")
     ref, dist, _ = inputs(case)

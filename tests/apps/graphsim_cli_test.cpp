@@ -129,6 +129,14 @@ TEST_F(GraphsimCli, MapHoldsTheKeypointScoresOnTheirPositions) {
   EXPECT_EQ(map.positions.size(), 40u);
 }
 
+TEST_F(GraphsimCli, ReportIsWrittenWithoutAHeatMap) {
+  const auto run =
+      qm3d(std::string("msgraphsim ") + kPair + " --report " + path("report.html") + " -q");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string html = test::slurp(path("report.html"));
+  EXPECT_NE(html.find("msgraphsim"), std::string::npos);
+}
+
 TEST_F(GraphsimCli, BatchTakesTheKeypointFile) {
   const std::string d = data().string();
   std::ofstream(path("list.csv")) << "reference,distorted,metric\n"
