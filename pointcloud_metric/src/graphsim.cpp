@@ -23,6 +23,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/metric.h"
+#include "qm3d/common/progress.h"
 #include "qm3d/common/version.h"
 #include "qm3d/pointcloud/metrics.h"
 
@@ -212,17 +213,31 @@ MetricResult run_graphsim(const std::string& metric, bool multiscale, const Inpu
   check_cloud(rc, ref.name(), metric);
   check_cloud(dc, dist.name(), metric);
   const double eps = neighbourhood_radius(rc.positions, ref.name());
+  ProgressSteps progress(run.progress, 3);
+  progress.begin("keypoints");
   std::string rule;
   const std::vector<std::size_t> keys = keypoints_for(rc.positions, o, run.threads, rule);
+  progress.begin("trees");
   const GraphsimCloud r(rc.positions, colours_255(rc.colors), run.threads);
   const GraphsimCloud d(dc.positions, colours_255(dc.colors), run.threads);
   if (run.inputs_done) run.inputs_done();
+  progress.begin("keypoint graphs");
   const std::vector<KeypointScores> scores = score_all(r, d, keys, eps, params, run.threads);
+  progress.finish();
   MetricResult result;
   result.metric = metric;
   result.ref_to_dist = direction_of(scores, multiscale, params.scales, run.per_element);
   combine_directions(result);
   result.values = result.ref_to_dist->values;
+  const auto lone =
+      std::count_if(scores.begin(), scores.end(), [](const KeypointScores& k) { return k.lone; });
+  if (lone > 0) {
+    result.warnings.push_back(
+        ref.name() + ": " + std::to_string(lone) + " of " + std::to_string(scores.size()) +
+        " keypoints have at most one other point within the graph radius: they score 0 (the "
+        "reference's rule), also against the same cloud; the cloud is sparse at eps " +
+        std::to_string(static_cast<long long>(eps)));
+  }
   if (run.direction && *run.direction != Direction::kRefToDist) {
     result.warnings.push_back(metric +
                               " has one direction (graphs around keypoints of the "

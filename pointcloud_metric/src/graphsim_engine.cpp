@@ -325,6 +325,7 @@ KeypointScores score_keypoint(const GraphsimCloud& reference, const GraphsimClou
   Scale r = keypoint_graph(reference, c, q, eps, rho_r);
   Scale d = keypoint_graph(distorted, c, q, eps, rho_d);
   KeypointScores out;
+  out.lone = weighted_rows(r).size() <= 1;
   out.channels = channel_products(r, d, q, params.threshold);
   out.per_scale.push_back(pooled(out.channels, params.weights));
   const double shrink = std::pow(kKeptFraction, params.sample_ratio);

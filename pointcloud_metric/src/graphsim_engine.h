@@ -48,6 +48,9 @@ struct GraphsimParams {
 struct KeypointScores {
   std::vector<double> per_scale;
   std::array<double, 3> channels{};
+  /// The reference's scale-0 graph has at most one point besides the keypoint: cg, hence the
+  /// score, is 0 whatever the distorted cloud (the reference's rule; a cloud sparse at eps).
+  bool lone = false;
 };
 
 /// Scores one keypoint (row `keypoint` of the reference) at params.scales scales; `eps` is the

@@ -243,6 +243,16 @@ TEST(Graphsim, FlatBoxIsRefusedWithItsCause) {
   }
 }
 
+TEST(Graphsim, LoneKeypointsScoreZeroWithAWarning) {
+  // Points 30 apart, eps 9: no keypoint has a neighbour, cg = 0 (the reference's rule).
+  const Input sparse = Input::from_cloud(grid_cloud(5, 30, 60), "sparse.ply");
+  const MetricResult r =
+      run_metric(registry().get("graphsim"), sparse, sparse, RunOptions{}, {{"keypoints", 3}});
+  EXPECT_EQ(r.score, 0.0);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("sparse.ply: 3 of 3 keypoints"), std::string::npos) << r.warnings[0];
+}
+
 TEST(Graphsim, SeededKeypointsAreDeterministic) {
   const Input& ref = cloud("smA_ref.ply");
   const Input& dist = cloud("smA_cnoise8.ply");
