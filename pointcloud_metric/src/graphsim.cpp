@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -152,11 +153,19 @@ std::vector<KeypointScores> score_all(const GraphsimCloud& ref, const GraphsimCl
                                       const std::vector<std::size_t>& keys, double eps,
                                       const GraphsimParams& params, int threads) {
   std::vector<KeypointScores> out(keys.size());
+  std::vector<std::exception_ptr> errors(keys.size());  // no exception leaves a parallel loop
   const long n = static_cast<long>(keys.size());
 #pragma omp parallel for num_threads(thread_count(threads)) schedule(dynamic, 1)
   for (long k = 0; k < n; ++k) {
-    out[static_cast<std::size_t>(k)] =
-        detail::score_keypoint(ref, dist, keys[static_cast<std::size_t>(k)], eps, params);
+    const auto i = static_cast<std::size_t>(k);
+    try {
+      out[i] = detail::score_keypoint(ref, dist, keys[i], eps, params);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
   }
   return out;
 }
@@ -203,6 +212,25 @@ DirectionResult direction_of(const std::vector<KeypointScores>& scores, bool mul
   return d;
 }
 
+/// The warnings of a run: keypoints alone in their reference graph, an ignored --direction.
+void add_warnings(MetricResult& result, const std::vector<KeypointScores>& scores,
+                  const std::string& reference, double eps, const RunOptions& run) {
+  const auto lone =
+      std::count_if(scores.begin(), scores.end(), [](const KeypointScores& k) { return k.lone; });
+  if (lone > 0) {
+    result.warnings.push_back(
+        reference + ": " + std::to_string(lone) + " of " + std::to_string(scores.size()) +
+        " keypoints have at most one other point within the graph radius: they score 0 (the "
+        "reference's rule), also against the same cloud; the cloud is sparse at eps " +
+        std::to_string(static_cast<long long>(eps)));
+  }
+  if (run.direction && *run.direction != Direction::kRefToDist) {
+    result.warnings.push_back(result.metric +
+                              " has one direction (graphs around keypoints of the "
+                              "reference): --direction ignored");
+  }
+}
+
 MetricResult run_graphsim(const std::string& metric, bool multiscale, const Input& ref,
                           const Input& dist, const RunOptions& run, const OptionValues& o) {
   const auto start = std::chrono::steady_clock::now();
@@ -229,20 +257,7 @@ MetricResult run_graphsim(const std::string& metric, bool multiscale, const Inpu
   result.ref_to_dist = direction_of(scores, multiscale, params.scales, run.per_element);
   combine_directions(result);
   result.values = result.ref_to_dist->values;
-  const auto lone =
-      std::count_if(scores.begin(), scores.end(), [](const KeypointScores& k) { return k.lone; });
-  if (lone > 0) {
-    result.warnings.push_back(
-        ref.name() + ": " + std::to_string(lone) + " of " + std::to_string(scores.size()) +
-        " keypoints have at most one other point within the graph radius: they score 0 (the "
-        "reference's rule), also against the same cloud; the cloud is sparse at eps " +
-        std::to_string(static_cast<long long>(eps)));
-  }
-  if (run.direction && *run.direction != Direction::kRefToDist) {
-    result.warnings.push_back(metric +
-                              " has one direction (graphs around keypoints of the "
-                              "reference): --direction ignored");
-  }
+  add_warnings(result, scores, ref.name(), eps, run);
   // keypoint_rows: the keypoints (a keypoint file of them gives the same result); --map writes
   // the per-keypoint scores on their positions.
   result.details = {{"keypoints", keys.size()},
