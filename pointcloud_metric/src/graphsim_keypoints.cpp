@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -33,32 +34,55 @@ constexpr double kMinWeightSum = 1e-6;            // below: the row keeps its po
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
-/// Neighbours searched beyond K: when the last of them is farther than the K-th, no point tied
-/// with the K-th was left out, and no radius search is needed.
-constexpr std::size_t kSpareNeighbours = 16;
+/// Growth of the search radius (squared) when it held fewer than K points, and its margin over
+/// the previous query's K-th distance (neighbouring queries have similar spacing).
+constexpr double kRadiusGrowth = 4;
+constexpr double kRadiusMargin = 1.5;
 
-/// The k nearest rows (tree input indices) of `query`, ascending, ties to the lower index.
-std::vector<std::uint32_t> nearest_rows(const KdTree& tree, const std::vector<Vec3>& points,
-                                        std::size_t query, std::size_t k,
-                                        std::vector<Neighbour>& found) {
-  tree.knn_search(points[query], k + kSpareNeighbours, found);
-  const auto by_row = [&] {
-    std::vector<std::pair<double, std::uint32_t>> all;
-    all.reserve(found.size());
-    for (const Neighbour& n : found) all.emplace_back(n.distance2, tree.input_index()[n.index]);
-    std::sort(all.begin(), all.end());
-    return all;
-  };
-  std::vector<std::pair<double, std::uint32_t>> all = by_row();
-  if (all.size() > k && !(all[k - 1].first < all.back().first)) {
-    // The K-th ties with every spare one: all the points at that distance, by row.
-    tree.radius_search(points[query], std::nextafter(all[k - 1].first, HUGE_VAL), found);
-    all = by_row();
+/// The k nearest rows (tree input indices) of a query, ascending, ties to the lower index, by
+/// radius searches: a search of squared radius R finds every point with d^2 < R; once it holds
+/// k points, every point tied with the k-th is among them (its d^2 < R too), so the result does
+/// not depend on R, only the work does. `radius2` carries R from one query to the next.
+class NearestRows {
+ public:
+  NearestRows(const KdTree& tree, const std::vector<Vec3>& points, std::size_t k)
+      : tree_(tree), points_(points), k_(k) {}
+
+  const std::vector<std::uint32_t>& of(std::size_t query) {
+    const Vec3& q = points_[query];
+    if (!(radius2_ > 0)) {
+      tree_.knn_search(q, k_, found_);
+      radius2_ = found_.back().distance2;
+    }
+    radius2_ = std::max(radius2_ * kRadiusMargin, std::numeric_limits<double>::min());
+    for (tree_.radius_search(q, radius2_, found_); found_.size() < k_;
+         tree_.radius_search(q, radius2_, found_)) {
+      radius2_ *= kRadiusGrowth;
+    }
+    std::nth_element(
+        found_.begin(), found_.begin() + static_cast<long>(k_ - 1), found_.end(),
+        [](const Neighbour& a, const Neighbour& b) { return a.distance2 < b.distance2; });
+    const double kth = found_[k_ - 1].distance2;
+    all_.clear();
+    for (const Neighbour& n : found_) {
+      if (n.distance2 <= kth) all_.emplace_back(n.distance2, tree_.input_index()[n.index]);
+    }
+    std::sort(all_.begin(), all_.end());
+    rows_.resize(k_);
+    for (std::size_t j = 0; j < k_; ++j) rows_[j] = all_[j].second;
+    radius2_ = kth;
+    return rows_;
   }
-  std::vector<std::uint32_t> out(k);
-  for (std::size_t j = 0; j < k; ++j) out[j] = all[j].second;
-  return out;
-}
+
+ private:
+  const KdTree& tree_;
+  const std::vector<Vec3>& points_;
+  std::size_t k_;
+  double radius2_ = 0;
+  std::vector<Neighbour> found_;
+  std::vector<std::pair<double, std::uint32_t>> all_;
+  std::vector<std::uint32_t> rows_;
+};
 
 /// The rows in (z, x, y) order, ties by file order: sorted position -> file row.
 std::vector<std::size_t> zxy_order(const std::vector<Vec3>& positions) {
@@ -82,10 +106,10 @@ std::vector<double> variation_scores(const std::vector<Vec3>& z, int threads) {
   const long count = static_cast<long>(n);
 #pragma omp parallel num_threads(thread_count(threads))
   {
-    std::vector<Neighbour> found;
+    NearestRows nearest(tree, z, k);
 #pragma omp for schedule(dynamic, 256)
     for (long i = 0; i < count; ++i) {
-      const auto rows = nearest_rows(tree, z, static_cast<std::size_t>(i), k, found);
+      const auto& rows = nearest.of(static_cast<std::size_t>(i));
       std::copy(rows.begin(), rows.end(), neighbours.begin() + i * static_cast<long>(k));
     }
   }
