@@ -18,7 +18,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 #include <random>
 
@@ -34,15 +33,15 @@ constexpr double kMinWeightSum = 1e-6;            // below: the row keeps its po
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
-/// Growth of the search radius (squared) when it held fewer than K points, and its margin over
-/// the previous query's K-th distance (neighbouring queries have similar spacing).
-constexpr double kRadiusGrowth = 4;
+/// The search radius (squared) over the previous query's K-th distance: neighbouring queries (in
+/// (z, x, y) order) have similar spacing.
 constexpr double kRadiusMargin = 1.5;
 
 /// The k nearest rows (tree input indices) of a query, ascending, ties to the lower index, by
 /// radius searches: a search of squared radius R finds every point with d^2 < R; once it holds
 /// k points, every point tied with the k-th is among them (its d^2 < R too), so the result does
-/// not depend on R, only the work does. `radius2` carries R from one query to the next.
+/// not depend on R, only the work does. R follows the previous query's K-th distance; a search
+/// that holds fewer than K points falls back to a k-NN search for the K-th distance.
 class NearestRows {
  public:
   NearestRows(const KdTree& tree, const std::vector<Vec3>& points, std::size_t k)
@@ -50,14 +49,11 @@ class NearestRows {
 
   const std::vector<std::uint32_t>& of(std::size_t query) {
     const Vec3& q = points_[query];
-    if (!(radius2_ > 0)) {
+    if (radius2_ > 0) tree_.radius_search(q, radius2_ * kRadiusMargin, found_);
+    if (!(radius2_ > 0) || found_.size() < k_) {
+      // No radius known, or too small: the k-th distance, and every point within it.
       tree_.knn_search(q, k_, found_);
-      radius2_ = found_.back().distance2;
-    }
-    radius2_ = std::max(radius2_ * kRadiusMargin, std::numeric_limits<double>::min());
-    for (tree_.radius_search(q, radius2_, found_); found_.size() < k_;
-         tree_.radius_search(q, radius2_, found_)) {
-      radius2_ *= kRadiusGrowth;
+      tree_.radius_search(q, std::nextafter(found_.back().distance2, HUGE_VAL), found_);
     }
     std::nth_element(
         found_.begin(), found_.begin() + static_cast<long>(k_ - 1), found_.end(),
