@@ -58,6 +58,9 @@ def test_self_is_exactly_one_and_arrays_score_as_their_files():
     ref, dist, keys = inputs(case)
     assert qm3d.graphsim(ref, ref, keypoint_file=keys).score == 1.0
     assert qm3d.msgraphsim(ref, ref, keypoint_file=keys, scales=6).score == 1.0
+    import pathlib
+    assert (qm3d.graphsim(ref, dist, keypoint_file=pathlib.Path(keys)).score
+            == qm3d.graphsim(ref, dist, keypoint_file=keys).score)
     arrays = [qm3d.read_cloud(p) for p in (ref, dist)]
     from_arrays = qm3d.graphsim(*arrays, keypoint_file=keys)
     assert from_arrays.score == qm3d.graphsim(ref, dist, keypoint_file=keys).score
