@@ -101,8 +101,8 @@ double& worst_error() {
   return worst;
 }
 
-/// Expects `got` within the tolerance of the case's column; on failure lists the keypoints whose
-/// scores differ from the reference's (`keypoint_column` of the per-keypoint table).
+/// Expects `got` within the tolerance of the case's column, and each keypoint's score within it
+/// of the reference's (`keypoint_column` of the per-keypoint table), listing those that differ.
 void expect_column(const std::map<std::string, std::string>& c, const std::string& column,
                    double got, const std::vector<double>& got_per_keypoint,
                    const std::string& keypoint_column) {
@@ -111,10 +111,15 @@ void expect_column(const std::map<std::string, std::string>& c, const std::strin
   worst_error() = std::max(worst_error(), err);
   EXPECT_LE(err, kTolerance) << c.at("case") << " " << column << ": got " << got << " want "
                              << want;
-  if (err <= kTolerance || keypoint_column.empty()) return;
+  if (keypoint_column.empty()) return;
+  // Every keypoint's score too (relative, or absolute for a keypoint scoring 0).
   const std::vector<double> ref = per_keypoint(c.at("case"), keypoint_column);
+  EXPECT_EQ(got_per_keypoint.size(), ref.size()) << c.at("case") << " " << keypoint_column;
   for (std::size_t k = 0; k < ref.size() && k < got_per_keypoint.size(); ++k) {
-    if (relative(got_per_keypoint[k], ref[k]) > kTolerance) {
+    const double e =
+        ref[k] == 0 ? std::abs(got_per_keypoint[k]) : relative(got_per_keypoint[k], ref[k]);
+    worst_error() = std::max(worst_error(), e);
+    if (e > kTolerance) {
       ADD_FAILURE() << "  keypoint " << k << ": got " << got_per_keypoint[k] << " want " << ref[k];
     }
   }
