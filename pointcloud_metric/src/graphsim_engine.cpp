@@ -118,38 +118,48 @@ Scale first_scale(const std::vector<Row>& set, const Vec3& c, double rho) {
   return s;
 }
 
-/// The radius graph of a scale: i-j is an edge iff 0 < d_ij <= radius, W_ij = exp(-d^2/sigma);
-/// each row's edges in ascending order of the other row.
-std::vector<std::vector<std::pair<std::size_t, double>>> radius_graph(const std::vector<Row>& rows,
-                                                                      double radius, double sigma) {
-  std::vector<std::vector<std::pair<std::size_t, double>>> edges(rows.size());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    for (std::size_t j = i + 1; j < rows.size(); ++j) {
-      const double d = distance(rows[i].p, rows[j].p);
-      if (!(d > 0 && d <= radius)) continue;
-      const double w = std::exp(-(d * d) / sigma);
-      edges[i].emplace_back(j, w);
-      edges[j].emplace_back(i, w);
+/// The edges of row i in the scale's radius graph (i-j an edge iff 0 < d_ij <= radius, W_ij =
+/// exp(-d^2/sigma), no self loops), ascending in j. Every scale's rows are sorted by x (sorted
+/// rows, coordinates shrunk by a monotone map), so the candidates, |x_j - x_i| <= radius (a lower
+/// bound of d_ij), are the contiguous rows from `first` on (every row when !by_x); |dy|, |dz|
+/// likewise skip most of them before the exact test.
+void edges_of(const std::vector<Row>& rows, std::size_t i, std::size_t first, bool by_x,
+              double radius, double sigma, std::vector<std::pair<std::size_t, double>>& edges) {
+  const double reach = radius * (1 + kQuerySlack);
+  const Vec3& p = rows[i].p;
+  edges.clear();
+  for (std::size_t j = first; j < rows.size() && (!by_x || rows[j].p[0] <= p[0] + reach); ++j) {
+    if (j == i || std::abs(rows[j].p[1] - p[1]) > reach || std::abs(rows[j].p[2] - p[2]) > reach) {
+      continue;
     }
+    const double d = distance(p, rows[j].p);
+    if (d > 0 && d <= radius) edges.emplace_back(j, std::exp(-(d * d) / sigma));
   }
-  return edges;
 }
 
-/// The blur: each row's colour becomes sum_j (W_ij * (1 / deg_i)) col_j over its edges (its own
-/// colour excluded), deg_i = sum_j W_ij; a row without edges keeps its colour. Coordinates stay.
+/// The blur on the scale's radius graph: each row's colour becomes sum_j (W_ij * (1 / deg_i))
+/// col_j, deg_i = sum_j W_ij, both summed in ascending j (its own colour excluded); a row
+/// without edges keeps its colour. Coordinates stay. Each row's edges are found when needed (no
+/// edge list: graphs of thousands of rows have millions of edges).
 void blur(std::vector<Row>& rows, double radius, double sigma) {
-  const auto edges = radius_graph(rows, radius, sigma);
+  const bool by_x = std::is_sorted(rows.begin(), rows.end(),
+                                   [](const Row& a, const Row& b) { return a.p[0] < b.p[0]; });
+  const double reach = radius * (1 + kQuerySlack);
   std::vector<Colour255> out(rows.size());
+  std::vector<std::pair<std::size_t, double>> edges;
+  std::size_t first = 0;  // the first row with x >= x_i - reach (x_i never decreases)
   for (std::size_t i = 0; i < rows.size(); ++i) {
+    while (by_x && rows[first].p[0] < rows[i].p[0] - reach) ++first;
+    edges_of(rows, i, first, by_x, radius, sigma, edges);
     double degree = 0;
-    for (const auto& e : edges[i]) degree += e.second;
+    for (const auto& e : edges) degree += e.second;
     if (degree == 0) {
       out[i] = rows[i].c;
       continue;
     }
     const double inverse = 1 / degree;
     Colour255 sum{0, 0, 0};
-    for (const auto& [j, w] : edges[i]) {
+    for (const auto& [j, w] : edges) {
       const double f = w * inverse;
       for (int k = 0; k < 3; ++k) sum[k] += f * rows[j].c[k];
     }
