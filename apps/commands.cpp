@@ -86,7 +86,13 @@ void write_map(const std::filesystem::path& map, const MetricSpec& spec, const M
   const DirectionResult& d = result.any_direction(prefer_dist);
   const bool on_distorted = result.dist_to_ref && &d == &*result.dist_to_ref;
   const Input& iterated = on_distorted ? distorted : reference;
-  if (spec.reads_for(reference, distorted) == Input::Kind::kMesh) {
+  if (result.details.contains("keypoint_rows")) {  // graphsim: values on the keypoints
+    std::vector<Vec3> at;
+    for (const auto& row : result.details.at("keypoint_rows")) {
+      at.push_back(reference.cloud().positions.at(row.get<std::size_t>()));
+    }
+    write_distortion_map(map, at, {}, d.per_element, d.per_element_values);
+  } else if (spec.reads_for(reference, distorted) == Input::Kind::kMesh) {
     const ColoredMesh& m = iterated.mesh().mesh;
     write_distortion_map(map, m.positions, m.triangles, d.per_element, d.per_element_values);
   } else {

@@ -278,6 +278,7 @@ json layers_json(const std::vector<ReportEntry>& entries, Shapes& shapes, Blobs&
     for (int k = 0; k < 2; ++k) {
       const auto& [dir, d] = dirs[prefer_dist ? k : 1 - k];
       if (!d->has_value() || (*d)->per_element.empty()) continue;
+      if (e.result->details.contains("keypoint_rows")) continue;  // on keypoints, not elements
       const int g = shapes.index(dir == Direction::kRefToDist, shapes.reads(*e.spec));
       layers.push_back(layer_json(e, dir, **d, g, shapes[g], blobs));
     }

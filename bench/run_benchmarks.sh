@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -31,6 +31,14 @@
 #            mm's `compare --mode ibsm` (one thread, no SSIM) runs on the two mesh pairs in the
 #            same loop, interleaved, and qm3d's YUV PSNR must equal the one mm prints. Targets:
 #            wall <= mm's on meshes, the cloud pair <= 10 s (reported, not enforced).
+#   graphsim `graphsim` / `msgraphsim --threads 2` on the vox1 pair with the reference data's
+#            keypoint file (vox1_ref / vox1_requant9, 56k points, 64 keypoints; the authors' code
+#            under Octave: 2.2 s / 4.7 s CPU, ../shared/data/reference/graphsim), the keypoint draw
+#            alone on vox1_ref (no keypoint file; theirs: 441 s of brute-force search) and both
+#            metrics with their default keypoints on a 1.17M-point voxelised sphere
+#            (bench/pointcloud/gen_voxel_sphere.py). Targets: CPU <= 1/20 of the reference's;
+#            the 1M pair in seconds (reported, not enforced); every score the same on every run
+#            and the vox1 scores equal to the table's (1e-10 relative).
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
 #            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
@@ -566,5 +574,37 @@ sys.exit(0 if abs(q - p) <= half * (1 + 1e-9) else 1)" "$1" "$2" 2>/dev/null
   done
   echo
   for line in "${summary[@]}"; do echo "$line"; done
+fi
+if [ "$WHICH" = all ] || [ "$WHICH" = graphsim ]; then
+  GS="$ROOT/../shared/data/reference/graphsim"
+  VOX="$ROOT/../shared/data/reference/voxel"
+  [ -f "$DATA/voxsphere_1m_ref.ply" ] || $PY "$ROOT/bench/pointcloud/gen_voxel_sphere.py" 290 "$DATA/voxsphere_1m" >&2
+  echo
+  echo "| case | threads | wall | CPU | peak RSS | score | reference score | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  want() { awk -F';' -v c="$1" -v k="$2" 'NR==1 {for (i = 1; i <= NF; i++) col[$i] = i} $1==c {print $col[k]}' "$GS/graphsim_reference.csv"; }
+  for c in "GraphSIM vox1 requant9, 64 keypoints|graphsim|$VOX/vox1_ref.ply|$VOX/vox1_requant9.ply|--keypoint-file $GS/keys_vox1_ref.txt|$(want vox1_requant9 graphsim)|CPU <= 0.11 s (2.2 s / 20)" \
+           "MS-GraphSIM vox1 requant9, 6 scales|msgraphsim|$VOX/vox1_ref.ply|$VOX/vox1_requant9.ply|--keypoint-file $GS/keys_vox1_ref.txt --scales 6|$(want vox1_requant9 msgraphsim_ns6)|CPU <= 0.24 s (4.7 s / 20)" \
+           "GraphSIM vox1, keypoints drawn (56k points)|graphsim|$VOX/vox1_ref.ply|$VOX/vox1_requant9.ply||n/a|wall <= 22 s (441 s / 20)" \
+           "GraphSIM sphere 1.17M points, keypoints drawn|graphsim|$DATA/voxsphere_1m_ref.ply|$DATA/voxsphere_1m_cnoise10.ply||n/a|seconds" \
+           "MS-GraphSIM sphere 1.17M points, keypoints drawn|msgraphsim|$DATA/voxsphere_1m_ref.ply|$DATA/voxsphere_1m_cnoise10.ply||n/a|seconds"; do
+    IFS='|' read -r label metric ref dist opts expected target <<<"$c"
+    : > "$TMP/gs"
+    : > "$TMP/gt"
+    for _ in $(seq "$RUNS"); do
+      # shellcheck disable=SC2086
+      measure_once "$TMP/gt" "$QM3D" "$metric" "$ref" "$dist" $opts --threads 2 --quiet --json
+      $PY -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['score']))" "$TMP/out" >> "$TMP/gs" 2>/dev/null || echo error >> "$TMP/gs"
+    done
+    s=$(head -1 "$TMP/gs")
+    if [ "$(sort -u "$TMP/gs" | wc -l)" != 1 ] || [ "$s" = error ]; then
+      echo "FAIL: $label: the score differs between runs or is missing" >&2; STATUS=1
+    fi
+    if [ "$expected" != n/a ] && ! $PY -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(0 if abs(a - b) <= 1e-10 * abs(b) else 1)" "$s" "$expected"; then
+      echo "FAIL: $label: score $s, reference $expected" >&2; STATUS=1
+    fi
+    printf '| %s | 2 | %s s | %s s | %s MB | %s | %s | %s |\n' "$label" "$(stats "$TMP/gt" 0)" \
+      "$(stats "$TMP/gt" 1)" "$(stats "$TMP/gt" 2 1024)" "$s" "$expected" "$target"
+  done
 fi
 exit $STATUS

@@ -280,6 +280,8 @@ def _option_value(spec, option, value):
         return _finite(name, value)
     if isinstance(default, list):
         return [_finite(name, v) for v in value]
+    if isinstance(default, str) and isinstance(value, _os.PathLike):
+        return _os.fspath(value)  # a file option (graphsim's keypoint_file) given as a Path
     return value
 
 

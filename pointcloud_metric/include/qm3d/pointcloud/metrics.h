@@ -24,11 +24,17 @@ MetricSpec psnr_spec(GridSampler grid_sampler = {});
 /// nearest neighbour, meshes read as their vertices. No options.
 MetricSpec dlab_spec(SurfaceColourMatcher on_surfaces);
 
+/// "graphsim" and "msgraphsim" (graphsim.cpp): GraphSIM and MS-GraphSIM of two coloured clouds
+/// on keypoints of the reference (a keypoint file or qm3d's seeded draw); similarities.
+MetricSpec graphsim_spec();
+MetricSpec msgraphsim_spec();
+
 /// Samples drawn from each mesh by pcqm_sampled when no points / density is given.
 inline constexpr int kDefaultSampledPoints = 20000;
 
 /// Registers the cloud reader, PCQM, when a surface sampler is registered (the mesh module,
-/// registered first) pcqm_sampled, psnr and dlab (with the registry's colour matcher).
+/// registered first) pcqm_sampled, psnr, dlab (with the registry's colour matcher), graphsim and
+/// msgraphsim.
 void register_metrics(Registry& registry);
 
 }  // namespace qm3d::pointcloud
