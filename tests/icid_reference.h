@@ -36,6 +36,14 @@ struct IcidCase {
   }
 };
 
+/// Rows whose numbers cannot come from the images they name, left out (and reported) until the
+/// table is regenerated. synth_colour_bars: its b image is a, 2 pixels to the right (7 saturated
+/// bars, 1344 of 16128 pixels differ, by up to ~60 in L*), yet the row's m1 (mean of
+/// 1 - 1 / (0.002 dL^2 + 1)) is 3.8e-7, i.e. window means of L differing by ~0.01 on average:
+/// nearly identical images. qm3d gives m1 = 0.035 on these files (92820 x), and every other row
+/// to ~1e-11.
+inline bool icid_row_left_out(const std::string& name) { return name == "synth_colour_bars"; }
+
 inline std::filesystem::path icid_dir() { return reference_dir() / "icid"; }
 
 inline std::vector<IcidCase> icid_cases() {

@@ -2,12 +2,12 @@
 // metric with its options), inputs (files recognised by content, or numpy arrays copied once),
 // run() with the GIL released, and the results. The pure-Python layer (python/qm3d/__init__.py)
 // turns these into qm3d.cmdm(), qm3d.pcqm(), ... with the tool's names and defaults.
+#include <algorithm>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "interruptible_call.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/evaluation.h"
 #include "qm3d/common/evaluation_io.h"
@@ -29,6 +28,7 @@
 #include "qm3d/pointcloud/metrics.h"
 #include "qm3d/render/ibsm.h"
 #include "qm3d/render/icid.h"
+#include "interruptible_call.h"
 
 namespace py = pybind11;
 
@@ -55,8 +55,7 @@ template <typename Out>
 std::vector<Out> rows_of_three(const py::array& a, const std::string& argument) {
   if (a.ndim() != 2 || a.shape(1) != 3) {
     std::string shape = "(";
-    for (py::ssize_t d = 0; d < a.ndim(); ++d)
-      shape += (d ? ", " : "") + std::to_string(a.shape(d));
+    for (py::ssize_t d = 0; d < a.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(a.shape(d));
     bad_argument(argument, "expected shape (N, 3), got " + shape + (a.ndim() == 1 ? ",)" : ")"));
   }
   const auto as_double = py::array_t<double, py::array::forcecast>::ensure(a);
@@ -73,8 +72,7 @@ std::vector<Out> rows_of_three(const py::array& a, const std::string& argument) 
 std::vector<Vec3> positions_of(const py::array& a) {
   const char kind = a.dtype().kind();
   if (kind != 'f' && kind != 'i' && kind != 'u') {
-    bad_argument("positions",
-                 "expected a float array, got dtype " + std::string(py::str(a.dtype())));
+    bad_argument("positions", "expected a float array, got dtype " + std::string(py::str(a.dtype())));
   }
   static_assert(sizeof(Vec3) == 3 * sizeof(double));
   std::vector<Vec3> p = rows_of_three<Vec3>(a, "positions");
@@ -117,8 +115,7 @@ std::vector<Rgb> colors_of(const py::array& a, std::size_t points) {
 std::vector<Triangle> faces_of(const py::array& a, std::size_t vertices) {
   const char kind = a.dtype().kind();
   if (kind != 'i' && kind != 'u') {
-    bad_argument("faces",
-                 "expected an integer array, got dtype " + std::string(py::str(a.dtype())));
+    bad_argument("faces", "expected an integer array, got dtype " + std::string(py::str(a.dtype())));
   }
   if (a.ndim() != 2 || a.shape(1) != 3) bad_argument("faces", "expected shape (F, 3)");
   const auto as_int = py::array_t<long long, py::array::forcecast>::ensure(a);
@@ -254,8 +251,8 @@ MetricResult run(const std::string& metric, const Input& reference, const Input&
   const Input ref = reference, dist = distorted;
   const bool release_inputs = a.release_inputs;
   return call_interruptibly<MetricResult>(
-      [&spec, run, options, callback, ref, dist,
-       release_inputs](const std::atomic<bool>& cancelled) mutable {
+      [&spec, run, options, callback, ref, dist, release_inputs](
+          const std::atomic<bool>& cancelled) mutable {
         // Every stage boundary checks for Ctrl-C; the user's callback (if any) is called with
         // the GIL, from the worker thread.
         run.progress = [&cancelled, callback](const std::string& stage, double fraction) {
@@ -275,9 +272,6 @@ MetricResult run(const std::string& metric, const Input& reference, const Input&
       });
 }
 
-}  // namespace
-}  // namespace qm3d::python
-
 /// An H x W x 3 or x 4 uint8 array (C order; the package checks it) as an RGB image, alpha
 /// dropped.
 render::RgbImage rgb_image_of(const py::array_t<std::uint8_t, py::array::c_style>& a,
@@ -295,6 +289,9 @@ render::RgbImage rgb_image_of(const py::array_t<std::uint8_t, py::array::c_style
   }
   return out;
 }
+
+}  // namespace
+}  // namespace qm3d::python
 
 PYBIND11_MODULE(_qm3d, m) {
   using namespace qm3d;
@@ -334,10 +331,10 @@ PYBIND11_MODULE(_qm3d, m) {
                py::gil_scoped_release release;
                return in.mesh();
              }();
-             return py::make_tuple(
-                 rows_as_numpy(m.mesh.positions),
-                 m.has_colors ? py::object(rows_as_numpy(m.mesh.colors)) : py::object(py::none()),
-                 faces_as_numpy(m.mesh.triangles), m.warnings);
+             return py::make_tuple(rows_as_numpy(m.mesh.positions),
+                                   m.has_colors ? py::object(rows_as_numpy(m.mesh.colors))
+                                                : py::object(py::none()),
+                                   faces_as_numpy(m.mesh.triangles), m.warnings);
            })
       .def("cloud_arrays", [](const Input& in) {
         const ColoredCloud& c = [&]() -> const ColoredCloud& {
@@ -361,11 +358,10 @@ PYBIND11_MODULE(_qm3d, m) {
                              [](const DirectionResult& d) {
                                return std::vector<double>(d.features.begin(), d.features.end());
                              })
-      .def_property_readonly("per_element",
-                             [](const DirectionResult& d) -> py::object {
-                               if (d.per_element.empty()) return py::none();
-                               return as_numpy(d.per_element);
-                             })
+      .def_property_readonly("per_element", [](const DirectionResult& d) -> py::object {
+        if (d.per_element.empty()) return py::none();
+        return as_numpy(d.per_element);
+      })
       .def_readonly("values", &DirectionResult::values)
       .def_property_readonly("per_element_values", [](const DirectionResult& d) {
         py::dict out;
@@ -380,7 +376,8 @@ PYBIND11_MODULE(_qm3d, m) {
       .def_readonly("ref_to_dist", &MetricResult::ref_to_dist)
       .def_readonly("feature_names", &MetricResult::feature_names)
       .def_readonly("warnings", &MetricResult::warnings)
-      .def_property_readonly("seconds", [](const MetricResult& r) { return r.provenance.seconds; })
+      .def_property_readonly("seconds",
+                             [](const MetricResult& r) { return r.provenance.seconds; })
       .def_readonly("values", &MetricResult::values)
       .def_property_readonly("details_json", [](const MetricResult& r) { return r.details.dump(); })
       .def("to_json", [](const MetricResult& r) { return to_json(r).dump(); })
@@ -405,9 +402,9 @@ PYBIND11_MODULE(_qm3d, m) {
          bool per_element, const std::string& data_dir, std::optional<std::vector<double>> weights,
          std::optional<std::string> model_path, py::object progress, bool release_inputs) {
         return run(metric, reference, distorted,
-                   RunArguments{options_json, std::move(direction), threads, per_element, data_dir,
-                                std::move(weights), std::move(model_path), std::move(progress),
-                                release_inputs});
+                   RunArguments{options_json, std::move(direction), threads, per_element,
+                                data_dir, std::move(weights), std::move(model_path),
+                                std::move(progress), release_inputs});
       },
       py::arg("metric"), py::arg("reference"), py::arg("distorted"), py::arg("options_json"),
       py::arg("direction"), py::arg("threads"), py::arg("per_element"), py::arg("data_dir"),
@@ -435,8 +432,7 @@ PYBIND11_MODULE(_qm3d, m) {
         o.all_axes = all_axes;
         o.bilinear = bilinear;
         if (box) {
-          if (box->size() != 6)
-            throw std::invalid_argument("box: 6 numbers (min x y z, max x y z)");
+          if (box->size() != 6) throw std::invalid_argument("box: 6 numbers (min x y z, max x y z)");
           FloatBox b;
           for (int k = 0; k < 3; ++k) {
             b.min[k] = static_cast<float>((*box)[k]);
@@ -470,8 +466,8 @@ PYBIND11_MODULE(_qm3d, m) {
 
   m.def(
       "render_views",
-      [](const Input& input, const std::string& options_json,
-         std::optional<std::vector<double>> frame, int threads) {
+      [](const Input& input, const std::string& options_json, std::optional<std::vector<double>> frame,
+         int threads) {
         const MetricSpec& spec = registry().get("ibsm");
         const render::IbsmOptions o =
             render::ibsm_options(spec.complete(nlohmann::json::parse(options_json)));
@@ -491,8 +487,8 @@ PYBIND11_MODULE(_qm3d, m) {
             f = render::frame_of(model, model);
           }
           dirs = render::view_directions(o);
-          views =
-              render::render_views(model, f, dirs, {o.resolution, o.culling, o.lighting}, threads);
+          views = render::render_views(model, f, dirs, {o.resolution, o.culling, o.lighting},
+                                       threads);
         }
         py::list out;
         for (std::size_t i = 0; i < views.size(); ++i) {
@@ -510,8 +506,8 @@ PYBIND11_MODULE(_qm3d, m) {
               dz(y, x) = v.rgba[k * 4 + 3] ? v.depth[k] : std::numeric_limits<float>::quiet_NaN();
             }
           }
-          out.append(py::make_tuple(std::vector<float>(dirs[i].begin(), dirs[i].end()), rgba, depth,
-                                    v.depth_range));
+          out.append(py::make_tuple(std::vector<float>(dirs[i].begin(), dirs[i].end()), rgba,
+                                    depth, v.depth_range));
         }
         return py::make_tuple(out, std::vector<float>(f.center.begin(), f.center.end()), f.radius);
       },
@@ -589,8 +585,8 @@ PYBIND11_MODULE(_qm3d, m) {
       "evaluate_metrics",
       [](const std::vector<std::string>& names, const std::vector<std::vector<double>>& scores,
          const std::vector<std::string>& lower_is_better, const std::string& orientation,
-         const std::vector<double>& mos, const std::vector<double>& ci95, const std::string& labels,
-         const std::vector<double>& sd, const std::vector<double>& n,
+         const std::vector<double>& mos, const std::vector<double>& ci95,
+         const std::string& labels, const std::vector<double>& sd, const std::vector<double>& n,
          const std::vector<std::vector<double>>& raw, const std::vector<std::size_t>& first,
          const std::vector<std::size_t>& second, const std::vector<int>& label,
          const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed) {
@@ -644,7 +640,6 @@ PYBIND11_MODULE(_qm3d, m) {
     AbandonedWorkers::instance().wait_all();
   });
 
-  m.def(
-      "load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
-      py::arg("path"));
+  m.def("load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
+        py::arg("path"));
 }
