@@ -11,8 +11,8 @@
 
 namespace {
 
-const std::filesystem::path kViews = std::filesystem::path(QM3D_SHARED_DATA_DIR) / "reference" /
-                                     "icid" / "views" / "blob4_geonoise";
+const std::filesystem::path kViews =
+    std::filesystem::path(QM3D_SHARED_DATA_DIR) / "reference" / "icid" / "views" / "blob4_geonoise";
 
 struct Pair {
   qm3d::render::RgbImage reference, distorted;
@@ -51,6 +51,32 @@ BENCHMARK(BM_Icid18Views256)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Use
 
 void BM_Icid18Views256NoIam(benchmark::State& state) { run_18_views(state, false); }
 BENCHMARK(BM_Icid18Views256NoIam)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// As `qm3d icid` computes them: the view pairs in parallel on `threads` threads, each pair on one.
+void BM_Icid18ViewsInParallel(benchmark::State& state) {
+  const auto table =
+      qm3d::Lab2000hlTable::shared(std::filesystem::path(QM3D_DEFAULT_TABLES) / "icid");
+  qm3d::render::IcidOptions o;
+  o.threads = 1;
+  const auto& pairs = view_pairs();
+  const int n = static_cast<int>(pairs.size());
+  std::vector<double> scores(pairs.size());
+  for (auto _ : state) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(static_cast <int>(state.range(0)))
+    for (int i = 0; i < n; ++i) {
+      scores[i] = qm3d::render::icid(pairs[i].reference, pairs[i].distorted, *table, o).icid;
+    }
+    benchmark::DoNotOptimize(scores.data());
+  }
+}
+BENCHMARK(BM_Icid18ViewsInParallel)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Arg(16)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -88,3 +88,15 @@ def test_icid_metric_function_exists():
     spec = next(m for m in qm3d.metrics() if m["name"] == "icid")
     assert spec["value_names"] == NAMES
     assert not spec["higher_is_better"]
+
+
+def test_icid_metric_on_meshes():
+    data = os.path.join(os.path.dirname(__file__), "..", "..", "data", "meshes")
+    ref, dist = (os.path.join(data, f"blob3_{n}.off") for n in ("ref", "bothnoise"))
+    one = qm3d.icid(ref, dist, resolution=64, threads=1)
+    two = qm3d.icid(ref, dist, resolution=64, threads=2)
+    assert one.score == two.score > 0
+    views = one.to_dict()["views"]
+    assert len(views) == 18
+    assert one.score == pytest.approx(sum(v["icid"] for v in views) / 18, rel=1e-14)
+    assert qm3d.icid(ref, ref, resolution=64).score == pytest.approx(0, abs=1e-13)

@@ -59,27 +59,30 @@ double csf_chroma(const ChromaCsf& c, double f) {
 /// holds along each axis of n samples the offsets from DC divided by their largest, floor(n/2):
 /// at the unshifted index k that is min(k, n - k) / floor(n / 2), so each axis's Nyquist is at
 /// 1 whatever n, and f = 20 sqrt(dx^2 + dy^2) cpd. The filters depend on min(k, n - k) only:
-/// they are kept on that quarter of the grid, (n_rows / 2 + 1) x (n_cols / 2 + 1).
+/// they are kept on that quarter of the grid, (n_rows / 2 + 1) x (n_cols / 2 + 1), column by
+/// column.
 struct CsfTables {
-  int quarter_cols = 0;
+  int quarter_rows = 0;
   std::array<std::vector<double>, 3> values;  ///< luminance, red-green, blue-yellow
-  double at(int channel, int k_folded, int l_folded) const {
-    return values[channel][static_cast<std::size_t>(k_folded) * quarter_cols + l_folded];
+  /// Column l_folded of a channel's table, k_folded = 0 .. quarter_rows - 1 contiguous (the
+  /// column pass reads it down a column).
+  const double* column(int channel, int l_folded) const {
+    return &values[channel][static_cast<std::size_t>(l_folded) * quarter_rows];
   }
 };
 
 CsfTables make_tables(int padded_rows, int padded_cols) {
   CsfTables t;
-  const int qr = padded_rows / 2 + 1;
-  t.quarter_cols = padded_cols / 2 + 1;
-  for (auto& v : t.values) v.resize(static_cast<std::size_t>(qr) * t.quarter_cols);
+  t.quarter_rows = padded_rows / 2 + 1;
+  const int qc = padded_cols / 2 + 1;
+  for (auto& v : t.values) v.resize(static_cast<std::size_t>(t.quarter_rows) * qc);
   const double row_norm = padded_rows / 2, col_norm = padded_cols / 2;
-  for (int k = 0; k < qr; ++k) {
-    const double dy = k / row_norm;
-    for (int l = 0; l < t.quarter_cols; ++l) {
-      const double dx = l / col_norm;
+  for (int l = 0; l < qc; ++l) {
+    const double dx = l / col_norm;
+    for (int k = 0; k < t.quarter_rows; ++k) {
+      const double dy = k / row_norm;
       const double f = std::sqrt(dx * dx + dy * dy) * kCyclesPerDegree;
-      const std::size_t i = static_cast<std::size_t>(k) * t.quarter_cols + l;
+      const std::size_t i = static_cast<std::size_t>(l) * t.quarter_rows + k;
       t.values[0][i] = csf_luminance(f);
       t.values[1][i] = csf_chroma(kRedGreen, f);
       t.values[2][i] = csf_chroma(kBlueYellow, f);
@@ -132,8 +135,8 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
         in[p] = spectra[static_cast<std::size_t>(mirror(p - rows, rows)) * nc + l];
       }
       fft.fwd(out.data(), in.data(), nr);
-      const int l_folded = std::min(l, nc - l);
-      for (int k = 0; k < nr; ++k) out[k] *= h.at(channel, std::min(k, nr - k), l_folded);
+      const double* filter = h.column(channel, std::min(l, nc - l));
+      for (int k = 0; k < nr; ++k) out[k] *= filter[std::min(k, nr - k)];
       fft.inv(in.data(), out.data(), nr);  // scaled by 1 / nr
       for (int p = 0; p < rows; ++p) crop[static_cast<std::size_t>(p) * nc + l] = in[rows + p];
     }
