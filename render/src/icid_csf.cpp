@@ -101,6 +101,70 @@ std::shared_ptr<const CsfTables> tables_for(int padded_rows, int padded_cols) {
   return slot;
 }
 
+/// The DFT of one length, forwards (unscaled) and backwards (scaled by 1 / n), as the
+/// reference's fft2 / ifft2 along an axis. Eigen's kissfft when the length has only small prime
+/// factors; kissfft's generic radix costs p^2 per prime factor p (a 257-pixel side: 771 = 3 x 257),
+/// so a length with a prime factor above kMaxKissPrime goes through Bluestein's algorithm
+/// (Bluestein 1970: the DFT as a convolution with the chirp w_k = exp(-i pi k^2 / n), done by
+/// FFTs of a length >= 2n - 1 with prime factors 2, 3, 5; exact to rounding, ~1e-16 of the
+/// largest value).
+class LineFft {
+ public:
+  static constexpr int kMaxKissPrime = 64;
+
+  explicit LineFft(int n) : n_(n) {
+    if (largest_prime_factor(n) <= kMaxKissPrime) return;
+    m_ = 2 * n - 1;
+    while (largest_prime_factor(m_) > 5) ++m_;  // kissfft's fast radices 2, 3, 4, 5
+    chirp_.resize(n);
+    for (long long k = 0; k < n; ++k) {
+      const double angle = -kPi * static_cast<double>((k * k) % (2LL * n)) / n;
+      chirp_[k] = Complex(std::cos(angle), std::sin(angle));
+    }
+    std::vector<Complex> b(m_, Complex(0, 0));
+    for (int k = 0; k < n; ++k) b[k] = std::conj(chirp_[k]);
+    for (int k = 1; k < n; ++k) b[m_ - k] = std::conj(chirp_[k]);
+    kernel_.resize(m_);
+    fft_.fwd(kernel_.data(), b.data(), m_);
+    a_.resize(m_);
+    spectrum_.resize(m_);
+  }
+
+  void forward(Complex* out, const Complex* in) {
+    if (m_ == 0) return fft_.fwd(out, in, n_);
+    std::fill(a_.begin(), a_.end(), Complex(0, 0));
+    for (int k = 0; k < n_; ++k) a_[k] = in[k] * chirp_[k];
+    fft_.fwd(spectrum_.data(), a_.data(), m_);
+    for (int k = 0; k < m_; ++k) spectrum_[k] *= kernel_[k];
+    fft_.inv(a_.data(), spectrum_.data(), m_);  // scaled by 1 / m
+    for (int k = 0; k < n_; ++k) out[k] = a_[k] * chirp_[k];
+  }
+
+  void inverse(Complex* out, const Complex* in) {
+    if (m_ == 0) return fft_.inv(out, in, n_);
+    conj_.resize(n_);
+    for (int k = 0; k < n_; ++k) conj_[k] = std::conj(in[k]);
+    forward(out, conj_.data());
+    const double scale = 1.0 / n_;
+    for (int k = 0; k < n_; ++k) out[k] = std::conj(out[k]) * scale;
+  }
+
+ private:
+  static constexpr double kPi = 3.14159265358979323846;
+
+  static int largest_prime_factor(int n) {
+    int largest = 1;
+    for (int p = 2; p * p <= n; ++p) {
+      while (n % p == 0) largest = p, n /= p;
+    }
+    return std::max(largest, n);
+  }
+
+  int n_ = 0, m_ = 0;  // m_ = 0: kissfft directly
+  Eigen::FFT<double> fft_;
+  std::vector<Complex> chirp_, kernel_, a_, spectrum_, conj_;
+};
+
 /// padarray's 'symmetric' border: index i in [-n, 2n) of the padded axis -> the image's index.
 int mirror(int i, int n) { return i < 0 ? -1 - i : (i >= n ? 2 * n - 1 - i : i); }
 
@@ -118,7 +182,7 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
   std::vector<Complex> crop(static_cast<std::size_t>(rows) * nc);
 #pragma omp parallel num_threads(thread_count(threads))
   {
-    Eigen::FFT<double> fft;  // one per thread: it caches its plans
+    LineFft row_fft(nc), column_fft(nr);  // one per thread: they cache their plans
     std::vector<Complex> in(std::max(nr, nc)), out(std::max(nr, nc));
 #pragma omp for schedule(static)
     for (int y = 0; y < rows; ++y) {
@@ -127,22 +191,22 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
         const std::size_t i = row + mirror(q - cols, cols);
         in[q] = Complex(a[i], b[i]);
       }
-      fft.fwd(&spectra[static_cast<std::size_t>(y) * nc], in.data(), nc);
+      row_fft.forward(&spectra[static_cast<std::size_t>(y) * nc], in.data());
     }
 #pragma omp for schedule(static)
     for (int l = 0; l < nc; ++l) {
       for (int p = 0; p < nr; ++p) {
         in[p] = spectra[static_cast<std::size_t>(mirror(p - rows, rows)) * nc + l];
       }
-      fft.fwd(out.data(), in.data(), nr);
+      column_fft.forward(out.data(), in.data());
       const double* filter = h.column(channel, std::min(l, nc - l));
       for (int k = 0; k < nr; ++k) out[k] *= filter[std::min(k, nr - k)];
-      fft.inv(in.data(), out.data(), nr);  // scaled by 1 / nr
+      column_fft.inverse(in.data(), out.data());  // scaled by 1 / nr
       for (int p = 0; p < rows; ++p) crop[static_cast<std::size_t>(p) * nc + l] = in[rows + p];
     }
 #pragma omp for schedule(static)
     for (int y = 0; y < rows; ++y) {
-      fft.inv(out.data(), &crop[static_cast<std::size_t>(y) * nc], nc);  // scaled by 1 / nc
+      row_fft.inverse(out.data(), &crop[static_cast<std::size_t>(y) * nc]);  // scaled by 1 / nc
       const std::size_t row = static_cast<std::size_t>(y) * cols;
       for (int x = 0; x < cols; ++x) {
         a[row + x] = out[cols + x].real();
