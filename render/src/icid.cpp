@@ -178,7 +178,10 @@ const Window& window_weights() {
 /// to the running sum. The order decides the last bits, which flat areas (variances
 /// E[x^2] - mu^2 of ~0) turn into differences of ~1e-12 in the maps; a separable filter
 /// differs there.
-std::vector<double> window_mean(const std::vector<double>& q, int rows, int cols) {
+/// Compiled twice, for AVX2 and for the baseline, chosen at run time: the same additions and
+/// multiplications in the same order (AVX2 without FMA), so the same bits, twice as fast.
+__attribute__((target_clones("avx2", "default"))) std::vector<double> window_mean(
+    const std::vector<double>& q, int rows, int cols) {
   const Window& h = window_weights();
   const int out_rows = rows - 2 * kWindowRadius, out_cols = cols - 2 * kWindowRadius;
   std::vector<double> out(static_cast<std::size_t>(out_rows) * out_cols, 0.0);
