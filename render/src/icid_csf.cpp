@@ -29,6 +29,8 @@ constexpr double kCyclesPerDegree = 20;
 // The padded image is 3x the image along each axis (FilterImageCSF 'pad_image' = 'both':
 // padarray(., [M N], 'symmetric', 'both')).
 constexpr int kPadFactor = 3;
+// Columns moved together between the row-major spectra and the column pass (whole cache lines).
+constexpr int kColumnBlock = 8;
 
 // XYZ -> YCC (RIT), Reinhard et al. (FilterImageCSF.m M_TF); the way back solves with it.
 constexpr double kXyzToYcc[3][3] = {
@@ -174,7 +176,8 @@ int thread_count(int requested) { return requested > 0 ? requested : omp_get_max
 /// padded image stays real: image a travels as the real part and image b as the imaginary part
 /// of one complex FFT. Of the padded image's 3 x rows only `rows` differ (mirrored copies), so
 /// only those rows are transformed first; the column pass transforms every column forwards,
-/// filters and back; the last pass transforms back only the rows of the centre crop.
+/// filters and back (kColumnBlock columns gathered at a time); the last pass transforms back only
+/// the rows of the centre crop.
 void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
                          const CsfTables& h, int channel, int threads) {
   const int nr = kPadFactor * rows, nc = kPadFactor * cols;
@@ -183,7 +186,8 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
 #pragma omp parallel num_threads(thread_count(threads))
   {
     LineFft row_fft(nc), column_fft(nr);  // one per thread: they cache their plans
-    std::vector<Complex> in(std::max(nr, nc)), out(std::max(nr, nc));
+    std::vector<Complex> in(nc), out(std::max(nr, nc));
+    std::vector<Complex> block(static_cast<std::size_t>(kColumnBlock) * nr);
 #pragma omp for schedule(static)
     for (int y = 0; y < rows; ++y) {
       const std::size_t row = static_cast<std::size_t>(y) * cols;
@@ -194,15 +198,27 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
       row_fft.forward(&spectra[static_cast<std::size_t>(y) * nc], in.data());
     }
 #pragma omp for schedule(static)
-    for (int l = 0; l < nc; ++l) {
-      for (int p = 0; p < nr; ++p) {
-        in[p] = spectra[static_cast<std::size_t>(mirror(p - rows, rows)) * nc + l];
+    for (int l0 = 0; l0 < nc; l0 += kColumnBlock) {
+      const int width = std::min(kColumnBlock, nc - l0);
+      for (int y = 0; y < rows;
+           ++y) {  // each row lands at padded rows M + y, M - 1 - y, 3M - 1 - y
+        const Complex* src = &spectra[static_cast<std::size_t>(y) * nc + l0];
+        for (int c = 0; c < width; ++c) {
+          Complex* column = &block[static_cast<std::size_t>(c) * nr];
+          column[rows + y] = column[rows - 1 - y] = column[3 * rows - 1 - y] = src[c];
+        }
       }
-      column_fft.forward(out.data(), in.data());
-      const double* filter = h.column(channel, std::min(l, nc - l));
-      for (int k = 0; k < nr; ++k) out[k] *= filter[std::min(k, nr - k)];
-      column_fft.inverse(in.data(), out.data());  // scaled by 1 / nr
-      for (int p = 0; p < rows; ++p) crop[static_cast<std::size_t>(p) * nc + l] = in[rows + p];
+      for (int c = 0; c < width; ++c) {
+        Complex* column = &block[static_cast<std::size_t>(c) * nr];
+        column_fft.forward(out.data(), column);
+        const double* filter = h.column(channel, std::min(l0 + c, nc - l0 - c));
+        for (int k = 0; k < nr; ++k) out[k] *= filter[std::min(k, nr - k)];
+        column_fft.inverse(column, out.data());  // scaled by 1 / nr
+      }
+      for (int p = 0; p < rows; ++p) {
+        Complex* dst = &crop[static_cast<std::size_t>(p) * nc + l0];
+        for (int c = 0; c < width; ++c) dst[c] = block[static_cast<std::size_t>(c) * nr + rows + p];
+      }
     }
 #pragma omp for schedule(static)
     for (int y = 0; y < rows; ++y) {
