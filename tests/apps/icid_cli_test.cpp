@@ -4,11 +4,13 @@
 // with one line naming the file.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "cli_runner.h"
 #include "icid_reference.h"
@@ -57,12 +59,33 @@ std::array<double, 8> values_of(const nlohmann::json& features) {
 // one by one in the library's test (tests/render/icid_test.cpp): 54 more runs of the tool would
 // add a minute to the suite and test nothing the JSON rows here do not.
 TEST_F(IcidCli, EverySyntheticRowFromTheJson) {
+  std::vector<test::IcidCase> rows;
   for (const auto& c : test::icid_cases()) {
-    if (!c.set().empty() || test::icid_row_left_out(c.name)) continue;
-    const auto r = run("image " + c.image_a + " " + c.image_b + " --json" +
-                       quoted(test::icid_cli_options(c.options)));
-    ASSERT_EQ(r.code, 0) << c.name << ": " << r.err;
-    const auto j = nlohmann::json::parse(r.out);
+    if (c.set().empty() && !test::icid_row_left_out(c.name)) rows.push_back(c);
+  }
+  ASSERT_EQ(rows.size(), 54u);
+  // The runs spread over the cores, each with its own output files and one thread.
+  std::vector<test::CliRun> runs(rows.size());
+  std::atomic<std::size_t> next{0};
+  const auto work = [&](int worker) {
+    const fs::path io = dir_ / ("worker" + std::to_string(worker));
+    fs::create_directories(io);
+    for (std::size_t i = next++; i < rows.size(); i = next++) {
+      runs[i] = test::run_qm3d("image " + rows[i].image_a + " " + rows[i].image_b +
+                                   " --json --threads 1" +
+                                   quoted(test::icid_cli_options(rows[i].options)) +
+                                   " --data-dir '" + test::tables_dir().string() + "'",
+                               icid_dir(), io);
+    }
+  };
+  std::vector<std::thread> workers(std::max(2u, std::thread::hardware_concurrency()) - 1);
+  for (std::size_t w = 0; w < workers.size(); ++w) workers[w] = std::thread(work, w + 1);
+  work(0);
+  for (auto& w : workers) w.join();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& c = rows[i];
+    ASSERT_EQ(runs[i].code, 0) << c.name << ": " << runs[i].err;
+    const auto j = nlohmann::json::parse(runs[i].out);
     EXPECT_EQ(j.at("score").get<double>(), j.at("features").at("icid").get<double>());
     const auto got = values_of(j.at("features"));
     for (int k = 0; k < 8; ++k) {
