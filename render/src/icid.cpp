@@ -325,6 +325,14 @@ std::filesystem::path icid_table_dir(const std::filesystem::path& data_dir) {
 
 IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& table,
                 const IcidOptions& options) {
+  for (const RgbImage* image : {&a, &b}) {
+    if (image->width <= 0 || image->height <= 0 ||
+        image->rgb.size() != static_cast<std::size_t>(image->width) * image->height * 3) {
+      throw std::invalid_argument("icid: an image of " + std::to_string(image->width) + "x" +
+                                  std::to_string(image->height) + " pixels holds " +
+                                  std::to_string(image->rgb.size()) + " bytes, not 3 a pixel");
+    }
+  }
   if (a.width != b.width || a.height != b.height) {
     throw std::invalid_argument("icid: the images differ in size (" + std::to_string(a.width) +
                                 "x" + std::to_string(a.height) + " and " + std::to_string(b.width) +

@@ -178,6 +178,8 @@ TEST(Icid, RejectsDifferentSizesAndTinyImages) {
   EXPECT_THROW(icid(a, b, icid_table()), std::invalid_argument);
   const RgbImage tiny{8, 8, std::vector<std::uint8_t>(8 * 8 * 3, 100)};
   EXPECT_THROW(icid(tiny, tiny, icid_table()), std::invalid_argument);
+  const RgbImage short_of_bytes{16, 16, std::vector<std::uint8_t>(16 * 16 * 3 - 1, 100)};
+  EXPECT_THROW(icid(short_of_bytes, short_of_bytes, icid_table()), std::invalid_argument);
 }
 
 void write_bytes(const std::filesystem::path& p, const std::string& bytes) {
