@@ -125,6 +125,11 @@ class CMakeBuild(build_ext):
         destination.mkdir(parents=True, exist_ok=True)
         for name in TABLE_FILES + (TABLE_LICENCE,):
             shutil.copy2(source / name, destination / name)
+        if has_tables(source / "icid"):  # iCID's full-precision tables (render/icid.h)
+            (destination / "icid").mkdir()
+            for name in TABLE_FILES + ("README.md",):
+                if (source / "icid" / name).is_file():
+                    shutil.copy2(source / "icid" / name, destination / "icid" / name)
 
 
 (ROOT / BUILD_BASE).mkdir(exist_ok=True)  # egg_info wants its folder to exist

@@ -13,6 +13,7 @@
 #include "demo.h"
 #include "eval_commands.h"
 #include "html_report.h"
+#include "image_command.h"
 #include "merge_command.h"
 #include "metric_cli.h"
 #include "progress_display.h"
@@ -303,6 +304,8 @@ int run(int argc, char** argv) {
       add_sample_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
   const auto merge_command =
       add_merge_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+  const auto image_command =
+      add_image_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
 
   try {
     app.parse(argc, argv);
@@ -316,6 +319,9 @@ int run(int argc, char** argv) {
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
   if (const auto code = run_sample_commands(*sample_commands)) return *code;
   if (const auto code = run_merge_command(*merge_command, global.quiet)) return *code;
+  if (const auto code = run_image_command(*image_command, global.threads, global.data_dir)) {
+    return *code;
+  }
   for (const ScoreCommand& c : score_commands) {
     if (*c.cmd) return run_score_command(c, global);
   }

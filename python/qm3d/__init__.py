@@ -47,7 +47,7 @@ FormatError = _qm3d.FormatError
 NumericError = _qm3d.NumericError
 """Well-formed input the metric cannot score, e.g. a zero-size bounding box (a ValueError)."""
 
-__all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample", "render",
+__all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample", "render", "image_quality",
            "read_mesh", "read_cloud", "evaluate", "load_model", "Result", "Direction",
            "InputError", "FormatError", "NumericError"]
 
@@ -692,3 +692,47 @@ def model_weights(model):
     for name, w in zip(model["features"], model["weights"]):
         weights[int(name[1:]) - 1] = float(w)
     return weights
+
+
+def _image_array(image, argument):
+    array = _np.asarray(image)
+    if array.dtype != _np.uint8:
+        raise ValueError(f"{argument}: expected a uint8 array (8-bit sRGB), got {array.dtype}")
+    if array.ndim != 3 or array.shape[2] not in (3, 4) or array.shape[0] < 1 or array.shape[1] < 1:
+        raise ValueError(f"{argument}: expected an (H, W, 3) or (H, W, 4) array, got shape "
+                         f"{array.shape}")
+    return _np.ascontiguousarray(array)
+
+
+def image_quality(a, b, *, intent="perceptual", iam=True, omit_maps67=False, downsampling=True,
+                  return_map=False, threads=0, data_dir=None):
+    """Compares two 8-bit sRGB images as ``qm3d image A B`` does.
+
+    Args:
+        a, b: (H, W, 3) or (H, W, 4) uint8 arrays of the same size, rows top first (a 4th
+            channel, alpha, is dropped, as the iCID reference's imread does).
+        intent: iCID's prediction intent: "perceptual", "hue-preserving" or "chromatic".
+        iam: iCID's image-appearance model (CSF filtering); False = the reference's IAM 'NONE'.
+        omit_maps67: leave out iCID's chroma contrast and chroma structure maps.
+        downsampling: iCID's automatic downsampling to ~256 px on the shorter side.
+        return_map: also return the per-pixel iCID map.
+        threads: OpenMP threads (0 = all cores); the values do not depend on it.
+        data_dir: folder of the LAB2000HL tables (iCID reads their full-precision copy in its
+            ``icid`` subfolder); default as the metric functions.
+
+    Returns:
+        dict: ``icid`` (0 = identical), ``icid_m1`` .. ``icid_m7`` (the means of iCID's seven
+        maps: lightness difference, lightness contrast, lightness structure, chroma difference,
+        hue difference, chroma contrast, chroma structure), ``ssim``, ``ms_ssim`` (of the BT.709
+        luma over the whole image) and ``psnr`` (of R, G, B; inf for identical images). With
+        ``return_map``: (that dict, the (H', W') float64 map, the (downsampled) image less a
+        5-pixel border).
+    """
+    if intent not in ("perceptual", "hue-preserving", "chromatic"):
+        raise ValueError(f"intent: expected 'perceptual', 'hue-preserving' or 'chromatic', got "
+                         f"{intent!r}")
+    values, pixel_map = _qm3d.image_quality(
+        _image_array(a, "a"), _image_array(b, "b"), intent, bool(iam), bool(omit_maps67),
+        bool(downsampling), bool(return_map), _thread_count(threads),
+        _os.fsdecode(data_dir) if data_dir is not None else (_DEFAULT_TABLES or ""))
+    return (values, pixel_map) if return_map else values

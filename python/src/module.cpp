@@ -27,6 +27,7 @@
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/pointcloud/metrics.h"
 #include "qm3d/render/ibsm.h"
+#include "qm3d/render/icid.h"
 #include "interruptible_call.h"
 
 namespace py = pybind11;
@@ -271,6 +272,24 @@ MetricResult run(const std::string& metric, const Input& reference, const Input&
       });
 }
 
+/// An H x W x 3 or x 4 uint8 array (C order; the package checks it) as an RGB image, alpha
+/// dropped.
+render::RgbImage rgb_image_of(const py::array_t<std::uint8_t, py::array::c_style>& a,
+                              const std::string& argument) {
+  if (a.ndim() != 3 || (a.shape(2) != 3 && a.shape(2) != 4) || a.shape(0) < 1 || a.shape(1) < 1) {
+    throw std::invalid_argument(argument + ": expected an (H, W, 3) or (H, W, 4) uint8 array");
+  }
+  render::RgbImage out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), {}};
+  const std::size_t pixels = static_cast<std::size_t>(out.width) * out.height;
+  const std::size_t channels = static_cast<std::size_t>(a.shape(2));
+  out.rgb.resize(pixels * 3);
+  const std::uint8_t* p = a.data();
+  for (std::size_t i = 0; i < pixels; ++i) {
+    for (int c = 0; c < 3; ++c) out.rgb[i * 3 + c] = p[i * channels + c];
+  }
+  return out;
+}
+
 }  // namespace
 }  // namespace qm3d::python
 
@@ -493,6 +512,50 @@ PYBIND11_MODULE(_qm3d, m) {
         return py::make_tuple(out, std::vector<float>(f.center.begin(), f.center.end()), f.radius);
       },
       py::arg("input"), py::arg("options_json"), py::arg("frame"), py::arg("threads"));
+
+  m.def(
+      "image_quality",
+      [](const py::array_t<std::uint8_t, py::array::c_style>& a,
+         const py::array_t<std::uint8_t, py::array::c_style>& b, const std::string& intent,
+         bool iam, bool omit_maps67, bool downsampling, bool keep_map, int threads,
+         const std::string& data_dir) {
+        const render::RgbImage ia = rgb_image_of(a, "a"), ib = rgb_image_of(b, "b");
+        if (ia.width != ib.width || ia.height != ib.height) {
+          throw std::invalid_argument("b: " + std::to_string(ib.height) + " x " +
+                                      std::to_string(ib.width) + " pixels, a has " +
+                                      std::to_string(ia.height) + " x " + std::to_string(ia.width) +
+                                      " (the same size needed)");
+        }
+        render::IcidOptions o;
+        o.intent = render::icid_intent(intent);
+        o.iam = iam;
+        o.omit_maps67 = omit_maps67;
+        o.downsampling = downsampling;
+        o.keep_map = keep_map;
+        o.threads = threads;
+        render::ImageScores s;
+        {
+          py::gil_scoped_release release;
+          const auto table = Lab2000hlTable::shared(render::icid_table_dir(data_dir));
+          s = render::image_scores(ia, ib, *table, o);
+        }
+        py::dict values;
+        values["icid"] = s.icid.icid;
+        for (int k = 0; k < 7; ++k) values[py::str(render::icid_map_names()[k])] = s.icid.maps[k];
+        values["ssim"] = s.ssim;
+        values["ms_ssim"] = s.ms_ssim;
+        values["psnr"] = s.psnr;
+        py::object map = py::none();
+        if (keep_map) {
+          py::array_t<double> m({static_cast<py::ssize_t>(s.icid.map_height),
+                                 static_cast<py::ssize_t>(s.icid.map_width)});
+          std::memcpy(m.mutable_data(), s.icid.map.data(), s.icid.map.size() * sizeof(double));
+          map = m;
+        }
+        return py::make_tuple(values, map);
+      },
+      py::arg("a"), py::arg("b"), py::arg("intent"), py::arg("iam"), py::arg("omit_maps67"),
+      py::arg("downsampling"), py::arg("keep_map"), py::arg("threads"), py::arg("data_dir"));
 
   m.def(
       "evaluate",

@@ -18,6 +18,7 @@
 #include "qm3d/common/large_arrays.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/texture.h"
+#include "qm3d/render/icid.h"
 #include "qm3d/render/image_quality.h"
 
 namespace qm3d::render {
@@ -484,6 +485,9 @@ MetricSpec ibsm_spec() {
   return s;
 }
 
-void register_metrics(Registry& registry) { registry.add(ibsm_spec()); }
+void register_metrics(Registry& registry) {
+  registry.add(ibsm_spec());
+  registry.add(icid_spec());
+}
 
 }  // namespace qm3d::render

@@ -101,7 +101,7 @@ std::vector<View> render_views(const RenderModel& model, const Frame& frame,
 
 /// The registry entry: metric `ibsm` for meshes and clouds (any pair).
 MetricSpec ibsm_spec();
-/// Registers ibsm.
+/// Registers ibsm and icid (icid.h).
 void register_metrics(Registry& registry);
 
 }  // namespace qm3d::render

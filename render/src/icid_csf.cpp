@@ -1,0 +1,284 @@
+// iCID's contrast-sensitivity filtering (icid_csf.h), written from SPEC-ICID step 4: the CSFs of
+// Reinhard, Khan, Akyuz & Johnson, "Color Imaging: Fundamentals and Applications" (2008) as the
+// reference (Netflix/vmaf @ f85a853, matlab/cid_icid/iCID/iCID_Metric/ColorSpaceTransformations/
+// FilterImageCSF.m) modifies them, applied in the frequency domain to the image padded
+// symmetrically to 3x its size. FFT: Eigen's unsupported FFT module (its kissfft backend,
+// BSD-3-Clause), Debian libeigen3-dev.
+#include "icid_csf.h"
+
+#include <omp.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <unsupported/Eigen/FFT>
+#include <utility>
+
+namespace qm3d::render::icid_detail {
+namespace {
+
+using Complex = std::complex<double>;
+
+// Cycles per degree at each axis's Nyquist frequency (iCID.m Options.CyclesPerDegree = 20).
+constexpr double kCyclesPerDegree = 20;
+// The padded image is 3x the image along each axis (FilterImageCSF 'pad_image' = 'both':
+// padarray(., [M N], 'symmetric', 'both')).
+constexpr int kPadFactor = 3;
+// Columns moved together between the row-major spectra and the column pass (whole cache lines).
+constexpr int kColumnBlock = 8;
+
+// XYZ -> YCC (RIT), Reinhard et al. (FilterImageCSF.m M_TF); the way back solves with it.
+constexpr double kXyzToYcc[3][3] = {
+    {0.0556, 0.9981, -0.0254}, {0.9510, -0.9038, 0.0}, {0.0386, 1.0822, -1.0276}};
+
+// Luminance CSF a f^c exp(-b f), made low-pass by the reference: 1 up to its second crossing of
+// 1 at 13.3395 cpd (FilterImageCSF.m CSF_lum).
+constexpr double kLumA = 0.63, kLumB = 0.085, kLumC = 0.616, kLumClip = 13.3395;
+
+// Chromatic CSFs (a1 e^(-b1 f^c1) + a2 e^(-b2 f^c2)) / (a1 + a2): 1 at f = 0
+// (FilterImageCSF.m CSF_rg, CSF_by).
+struct ChromaCsf {
+  double a1, b1, c1, a2, b2, c2;
+};
+constexpr ChromaCsf kRedGreen{91.228, 0.0003, 2.803, 74.907, 0.0038, 2.601};
+constexpr ChromaCsf kBlueYellow{5.623, 0.00001, 3.4066, 41.9363, 0.083, 1.3684};
+
+double csf_luminance(double f) {
+  return f <= kLumClip ? 1.0 : kLumA * std::pow(f, kLumC) * std::exp(-kLumB * f);
+}
+
+double csf_chroma(const ChromaCsf& c, double f) {
+  return (c.a1 * std::exp(-c.b1 * std::pow(f, c.c1)) + c.a2 * std::exp(-c.b2 * std::pow(f, c.c2))) /
+         (c.a1 + c.a2);
+}
+
+/// The three filters on the padded size's frequency grid. The reference's grid (fftshift order)
+/// holds along each axis of n samples the offsets from DC divided by their largest, floor(n/2):
+/// at the unshifted index k that is min(k, n - k) / floor(n / 2), so each axis's Nyquist is at
+/// 1 whatever n, and f = 20 sqrt(dx^2 + dy^2) cpd. The filters depend on min(k, n - k) only:
+/// they are kept on that quarter of the grid, (n_rows / 2 + 1) x (n_cols / 2 + 1), column by
+/// column.
+struct CsfTables {
+  int quarter_rows = 0;
+  std::array<std::vector<double>, 3> values;  ///< luminance, red-green, blue-yellow
+  /// Column l_folded of a channel's table, k_folded = 0 .. quarter_rows - 1 contiguous (the
+  /// column pass reads it down a column).
+  const double* column(int channel, int l_folded) const {
+    return &values[channel][static_cast<std::size_t>(l_folded) * quarter_rows];
+  }
+};
+
+CsfTables make_tables(int padded_rows, int padded_cols) {
+  CsfTables t;
+  t.quarter_rows = padded_rows / 2 + 1;
+  const int qc = padded_cols / 2 + 1;
+  for (auto& v : t.values) v.resize(static_cast<std::size_t>(t.quarter_rows) * qc);
+  const double row_norm = padded_rows / 2, col_norm = padded_cols / 2;
+  for (int l = 0; l < qc; ++l) {
+    const double dx = l / col_norm;
+    for (int k = 0; k < t.quarter_rows; ++k) {
+      const double dy = k / row_norm;
+      const double f = std::sqrt(dx * dx + dy * dy) * kCyclesPerDegree;
+      const std::size_t i = static_cast<std::size_t>(l) * t.quarter_rows + k;
+      t.values[0][i] = csf_luminance(f);
+      t.values[1][i] = csf_chroma(kRedGreen, f);
+      t.values[2][i] = csf_chroma(kBlueYellow, f);
+    }
+  }
+  return t;
+}
+
+/// The tables of a padded size, computed once per size (the views of a metric share one).
+std::shared_ptr<const CsfTables> tables_for(int padded_rows, int padded_cols) {
+  static std::mutex mutex;
+  static std::map<std::pair<int, int>, std::shared_ptr<const CsfTables>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[{padded_rows, padded_cols}];
+  if (!slot) slot = std::make_shared<const CsfTables>(make_tables(padded_rows, padded_cols));
+  return slot;
+}
+
+/// The DFT of one length, forwards (unscaled) and backwards (scaled by 1 / n), as the
+/// reference's fft2 / ifft2 along an axis. Eigen's kissfft when the length has only small prime
+/// factors; kissfft's generic radix costs p^2 per prime factor p (a 257-pixel side: 771 = 3 x 257),
+/// so a length with a prime factor above kMaxKissPrime goes through Bluestein's algorithm
+/// (Bluestein 1970: the DFT as a convolution with the chirp w_k = exp(-i pi k^2 / n), done by
+/// FFTs of a length >= 2n - 1 with prime factors 2, 3, 5; exact to rounding, ~1e-16 of the
+/// largest value).
+class LineFft {
+ public:
+  static constexpr int kMaxKissPrime = 64;
+
+  explicit LineFft(int n) : n_(n) {
+    if (largest_prime_factor(n) <= kMaxKissPrime) return;
+    m_ = 2 * n - 1;
+    while (largest_prime_factor(m_) > 5) ++m_;  // kissfft's fast radices 2, 3, 4, 5
+    chirp_.resize(n);
+    for (long long k = 0; k < n; ++k) {
+      const double angle = -kPi * static_cast<double>((k * k) % (2LL * n)) / n;
+      chirp_[k] = Complex(std::cos(angle), std::sin(angle));
+    }
+    std::vector<Complex> b(m_, Complex(0, 0));
+    for (int k = 0; k < n; ++k) b[k] = std::conj(chirp_[k]);
+    for (int k = 1; k < n; ++k) b[m_ - k] = std::conj(chirp_[k]);
+    kernel_.resize(m_);
+    fft_.fwd(kernel_.data(), b.data(), m_);
+    a_.resize(m_);
+    spectrum_.resize(m_);
+  }
+
+  void forward(Complex* out, const Complex* in) {
+    if (m_ == 0) return fft_.fwd(out, in, n_);
+    std::fill(a_.begin(), a_.end(), Complex(0, 0));
+    for (int k = 0; k < n_; ++k) a_[k] = in[k] * chirp_[k];
+    fft_.fwd(spectrum_.data(), a_.data(), m_);
+    for (int k = 0; k < m_; ++k) spectrum_[k] *= kernel_[k];
+    fft_.inv(a_.data(), spectrum_.data(), m_);  // scaled by 1 / m
+    for (int k = 0; k < n_; ++k) out[k] = a_[k] * chirp_[k];
+  }
+
+  void inverse(Complex* out, const Complex* in) {
+    if (m_ == 0) return fft_.inv(out, in, n_);
+    conj_.resize(n_);
+    for (int k = 0; k < n_; ++k) conj_[k] = std::conj(in[k]);
+    forward(out, conj_.data());
+    const double scale = 1.0 / n_;
+    for (int k = 0; k < n_; ++k) out[k] = std::conj(out[k]) * scale;
+  }
+
+ private:
+  static constexpr double kPi = 3.14159265358979323846;
+
+  static int largest_prime_factor(int n) {
+    int largest = 1;
+    for (int p = 2; p * p <= n; ++p) {
+      while (n % p == 0) largest = p, n /= p;
+    }
+    return std::max(largest, n);
+  }
+
+  int n_ = 0, m_ = 0;  // m_ = 0: kissfft directly
+  Eigen::FFT<double> fft_;
+  std::vector<Complex> chirp_, kernel_, a_, spectrum_, conj_;
+};
+
+/// padarray's 'symmetric' border: index i in [-n, 2n) of the padded axis -> the image's index.
+int mirror(int i, int n) { return i < 0 ? -1 - i : (i >= n ? 2 * n - 1 - i : i); }
+
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+/// One channel of both images filtered in place. The CSF is real and even, so the filtered
+/// padded image stays real: image a travels as the real part and image b as the imaginary part
+/// of one complex FFT. Of the padded image's 3 x rows only `rows` differ (mirrored copies), so
+/// only those rows are transformed first; the column pass transforms every column forwards,
+/// filters and back (kColumnBlock columns gathered at a time); the last pass transforms back only
+/// the rows of the centre crop.
+void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
+                         const CsfTables& h, int channel, int threads) {
+  const int nr = kPadFactor * rows, nc = kPadFactor * cols;
+  std::vector<Complex> spectra(static_cast<std::size_t>(rows) * nc);
+  std::vector<Complex> crop(static_cast<std::size_t>(rows) * nc);
+#pragma omp parallel num_threads(thread_count(threads))
+  {
+    LineFft row_fft(nc), column_fft(nr);  // one per thread: they cache their plans
+    std::vector<Complex> in(nc), out(std::max(nr, nc));
+    std::vector<Complex> block(static_cast<std::size_t>(kColumnBlock) * nr);
+#pragma omp for schedule(static)
+    for (int y = 0; y < rows; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * cols;
+      for (int q = 0; q < nc; ++q) {
+        const std::size_t i = row + mirror(q - cols, cols);
+        in[q] = Complex(a[i], b[i]);
+      }
+      row_fft.forward(&spectra[static_cast<std::size_t>(y) * nc], in.data());
+    }
+#pragma omp for schedule(static)
+    for (int l0 = 0; l0 < nc; l0 += kColumnBlock) {
+      const int width = std::min(kColumnBlock, nc - l0);
+      for (int y = 0; y < rows;
+           ++y) {  // each row lands at padded rows M + y, M - 1 - y, 3M - 1 - y
+        const Complex* src = &spectra[static_cast<std::size_t>(y) * nc + l0];
+        for (int c = 0; c < width; ++c) {
+          Complex* column = &block[static_cast<std::size_t>(c) * nr];
+          column[rows + y] = column[rows - 1 - y] = column[3 * rows - 1 - y] = src[c];
+        }
+      }
+      for (int c = 0; c < width; ++c) {
+        Complex* column = &block[static_cast<std::size_t>(c) * nr];
+        column_fft.forward(out.data(), column);
+        const double* filter = h.column(channel, std::min(l0 + c, nc - l0 - c));
+        for (int k = 0; k < nr; ++k) out[k] *= filter[std::min(k, nr - k)];
+        column_fft.inverse(column, out.data());  // scaled by 1 / nr
+      }
+      for (int p = 0; p < rows; ++p) {
+        Complex* dst = &crop[static_cast<std::size_t>(p) * nc + l0];
+        for (int c = 0; c < width; ++c) dst[c] = block[static_cast<std::size_t>(c) * nr + rows + p];
+      }
+    }
+#pragma omp for schedule(static)
+    for (int y = 0; y < rows; ++y) {
+      row_fft.inverse(out.data(), &crop[static_cast<std::size_t>(y) * nc]);  // scaled by 1 / nc
+      const std::size_t row = static_cast<std::size_t>(y) * cols;
+      for (int x = 0; x < cols; ++x) {
+        a[row + x] = out[cols + x].real();
+        b[row + x] = out[cols + x].imag();
+      }
+    }
+  }
+}
+
+using Ycc = std::array<std::vector<double>, 3>;
+
+/// XYZ -> YCC; the luminance's mean (mean2 of channel 1) subtracted and returned.
+double to_ycc(const XyzPlanes& in, Ycc& out) {
+  const std::size_t n = in.x.size();
+  for (auto& c : out) c.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      out[c][i] = kXyzToYcc[c][0] * in.x[i] + kXyzToYcc[c][1] * in.y[i] + kXyzToYcc[c][2] * in.z[i];
+    }
+  }
+  double sum = 0;
+  for (double v : out[0]) sum += v;
+  const double mean = sum / static_cast<double>(n);
+  for (double& v : out[0]) v -= mean;
+  return mean;
+}
+
+/// The luminance's mean added back; YCC -> XYZ (M_TF \ YCC).
+void to_xyz(Ycc& in, double lum_mean, XyzPlanes& out) {
+  static const Eigen::Matrix3d inverse = [] {
+    Eigen::Matrix3d m;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) m(r, c) = kXyzToYcc[r][c];
+    }
+    return Eigen::Matrix3d(m.inverse());
+  }();
+  for (std::size_t i = 0; i < in[0].size(); ++i) {
+    const Eigen::Vector3d ycc(in[0][i] + lum_mean, in[1][i], in[2][i]);
+    const Eigen::Vector3d xyz = inverse * ycc;
+    out.x[i] = xyz[0];
+    out.y[i] = xyz[1];
+    out.z[i] = xyz[2];
+  }
+}
+
+}  // namespace
+
+void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
+  const int rows = a.rows, cols = a.cols;
+  const auto tables = tables_for(kPadFactor * rows, kPadFactor * cols);
+  Ycc ycc_a, ycc_b;
+  const double mean_a = to_ycc(a, ycc_a), mean_b = to_ycc(b, ycc_b);
+  for (int c = 0; c < 3; ++c)
+    filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
+  to_xyz(ycc_a, mean_a, a);
+  to_xyz(ycc_b, mean_b, b);
+}
+
+}  // namespace qm3d::render::icid_detail
