@@ -18,6 +18,7 @@ void register_metrics(Registry& registry) {
   if (registry.has_sampler()) registry.add(pcqm_sampled_spec(registry.sampler()));
   registry.add(psnr_spec(registry.grid_sampler()));
   registry.add(dlab_spec(registry.colour_matcher()));
+  registry.add(pointssim_spec());
 }
 
 }  // namespace qm3d::pointcloud

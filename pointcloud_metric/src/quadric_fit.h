@@ -12,7 +12,7 @@
 namespace qm3d::pointcloud::detail {
 
 struct QuadricFit {
-  Vec3 foot{0, 0, 0};         ///< origin + f n: the origin projected onto the fitted surface
+  Vec3 foot{0, 0, 0};  ///< origin + f n: the origin projected onto the fitted surface
   /// H at the origin (in inverse coordinate units), signed along the normal, whose orientation
   /// is the eigen-solver's (either path may choose the other one: |H| and `foot` do not depend
   /// on it).
@@ -33,8 +33,8 @@ struct QuadricFit {
 ///   a design whose unit-column form is not clearly well-conditioned, non-finite input), where the
 ///   reference's rounding decides the value (SPEC-PCQM §9.5).
 ///
-/// The reference's path is bit-for-bit its arithmetic: raw second moment minus the mean's outer product,
-/// `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
+/// The reference's path is bit-for-bit its arithmetic: raw second moment minus the mean's outer
+/// product, `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
 /// differently), frame t1 = largest, t2 = middle, n = smallest eigenvector, coordinates relative
 /// to the origin, `ColPivHouseholderQR<MatrixXd>` (its basic solution when there are fewer than
 /// six points). With no neighbour at all the result is the origin and H = 0, which is what the
@@ -62,6 +62,15 @@ class QuadricFitter {
   Eigen::MatrixXd design_;
   Eigen::VectorXd heights_;
 };
+
+/// The least-squares solution c of the n x 6 system held column by column in `col` (col[0..5]
+/// the design, col[6] the right-hand side; each n long, overwritten), by an unpivoted
+/// Householder QR. False (c undefined) when the design with unit columns is not clearly
+/// well-conditioned (its smallest singular value below 1e-2, or a pivot below that share of its
+/// column's norm): the solution would then depend on the solver's rounding, and the caller
+/// decides (PCQM: the reference's QR; PointSSIM: a minimum-norm solve). Both quadric fits of
+/// the module (QuadricFitter, pointssim_fit.cpp) solve their well-posed systems here.
+bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]);
 
 /// Mean curvature of the graph of z = f(x, y) at the origin from f's first and second
 /// derivatives (do Carmo, "Differential Geometry of Curves and Surfaces", 3-3, ex. 21), written
