@@ -481,7 +481,7 @@ MetricSpec pointssim_spec() {
   s.quality_value_names = s.value_names;
   s.options = {
       {"neighbours",
-       "pointssim: K, the neighbourhood of each point's statistics, the point itself included "
+       "K, the neighbourhood of each point's statistics, the point itself included "
        "(the reference's NEIGHBORHOOD_SIZE)",
        12,
        {},
