@@ -125,6 +125,7 @@ double default_radius(const SsimCloud& reference) {
 struct Scored {
   SsimCloud cloud;
   std::unique_ptr<OrderedSearch> search;
+  SurfaceEstimates surface;  ///< when normals or curvature are compared
   FeatureMaps features;
 };
 
@@ -178,6 +179,7 @@ struct Request {
   std::size_t score_map = 0;      ///< attribute x estimator slot of the score
   std::size_t score_pooling = 0;  ///< index in poolings
   std::string score_name;
+  bool colours = false;  ///< colour is compared
 };
 
 template <typename T>
@@ -196,10 +198,9 @@ Request make_request(std::vector<PointssimAttribute> attributes, const Pointssim
   if (r.estimators.empty() || r.poolings.empty()) {
     throw std::invalid_argument("pointssim: at least one estimator and one pooling are needed");
   }
-  const bool colour =
-      std::count(r.attributes.begin(), r.attributes.end(), PointssimAttribute::kColor);
-  const std::size_t a =
-      index_or_first(r.attributes, colour ? PointssimAttribute::kColor : PointssimAttribute::kGeom);
+  r.colours = std::count(r.attributes.begin(), r.attributes.end(), PointssimAttribute::kColor) > 0;
+  const std::size_t a = index_or_first(
+      r.attributes, r.colours ? PointssimAttribute::kColor : PointssimAttribute::kGeom);
   const std::size_t e = index_or_first(r.estimators, PointssimEstimator::kVar);
   r.score_map = a * r.estimators.size() + e;
   r.score_pooling = index_or_first(r.poolings, PointssimPooling::kMean);
@@ -328,6 +329,60 @@ nlohmann::json list_json(const Request& r) {
   return {{"attributes", a}, {"estimators", e}, {"poolings", p}};
 }
 
+// Both directions the options ask for, their values and the symmetric ones, NaN values left out.
+MetricResult score_directions(const Scored& a, const Scored& b, const Request& r,
+                              const PointssimOptions& o) {
+  const Direction dir = o.direction.value_or(Direction::kSymmetric);
+  MetricResult result;
+  result.metric = "pointssim";
+  if (dir != Direction::kDistToRef) {
+    result.ref_to_dist = score_direction(a, b, r, o.threads, o.per_element);  // AB
+  }
+  if (dir != Direction::kRefToDist) {
+    result.dist_to_ref = score_direction(b, a, r, o.threads, o.per_element);  // BA
+  }
+  if (result.ref_to_dist && result.dist_to_ref) {
+    result.values = symmetric_values(*result.ref_to_dist, *result.dist_to_ref);
+  } else {
+    result.values = result.any_direction().values;
+  }
+  result.score = *find_value(result.values, r.score_name);
+  drop_nan(result.values, "", result.warnings);
+  if (result.ref_to_dist) drop_nan(result.ref_to_dist->values, "ref-to-dist ", result.warnings);
+  if (result.dist_to_ref) drop_nan(result.dist_to_ref->values, "dist-to-ref ", result.warnings);
+  return result;
+}
+
+// The result's warnings (fused duplicates), details and provenance.
+void describe(MetricResult& result, const Scored& a, const Scored& b, const Request& r,
+              const PointssimOptions& o, const std::optional<detail::FitNeighbourhood>& fit,
+              const std::array<std::string, 2>& names) {
+  const std::array<const Scored*, 2> clouds{&a, &b};
+  for (std::size_t c = 0; c < 2; ++c) {
+    if (clouds[c]->cloud.duplicates == 0) continue;
+    result.warnings.push_back(names[c] + ": " + std::to_string(clouds[c]->cloud.duplicates) +
+                              " duplicate points fused (pointssim scores distinct positions" +
+                              (r.colours ? ", colours averaged)" : ")"));
+  }
+  nlohmann::json fit_json = nullptr;
+  if (fit) {
+    fit_json = fit->count > 0 ? nlohmann::json{{"method", "knn"}, {"size", fit->count}}
+                              : nlohmann::json{{"method", "radius"}, {"size", fit->radius}};
+  }
+  result.details = {
+      {"score_value", r.score_name},
+      {"points", {{"reference", a.cloud.points.size()}, {"distorted", b.cloud.points.size()}}},
+      {"duplicates_fused", {{"reference", a.cloud.duplicates}, {"distorted", b.cloud.duplicates}}},
+      {"fit", fit_json}};
+  result.text_note = "[" + r.score_name + "; 1 = identical]";
+  result.provenance.version = kVersion;
+  result.provenance.options = list_json(r);
+  result.provenance.options["direction"] =
+      direction_name(o.direction.value_or(Direction::kSymmetric));
+  result.provenance.options["neighbours"] = o.neighbours;
+  result.provenance.options["fit"] = fit_json;
+}
+
 }  // namespace
 
 const char* pointssim_name(PointssimAttribute a) {
@@ -378,78 +433,35 @@ MetricResult compute_pointssim(const ColoredCloud& reference, const ColoredCloud
   if (o.neighbours < kMinNeighbours) throw std::invalid_argument("neighbours: at least 3");
   const Request r =
       make_request(resolve_attributes(o, reference, distorted, reference_name, distorted_name), o);
-  const bool colours =
-      std::count(r.attributes.begin(), r.attributes.end(), PointssimAttribute::kColor) > 0;
   ProgressSteps progress(o.progress, 4);
   progress.begin("sorting and fusing points");
-  const auto a = prepare(reference, colours, reference_name, o.threads);
-  const auto b = prepare(distorted, colours, distorted_name, o.threads);
+  const auto a = prepare(reference, r.colours, reference_name, o.threads);
+  const auto b = prepare(distorted, r.colours, distorted_name, o.threads);
   if (o.inputs_done) o.inputs_done();
   const auto k = static_cast<std::size_t>(o.neighbours);
   const std::string why_k = "the neighbourhood of " + std::to_string(k) + " points";
   check_size(a->cloud, k, reference_name, why_k);
   check_size(b->cloud, k, distorted_name, why_k);
-  std::optional<detail::FitNeighbourhood> fit;
-  SurfaceEstimates surface_a, surface_b;
   progress.begin("normals and curvatures");
+  std::optional<detail::FitNeighbourhood> fit;
   if (needs_surface(r)) {
     fit = fit_neighbourhood(o, *a);
     const std::size_t needed = std::max(kQuadricTerms, fit->count);
     const std::string why_fit = "a quadric fit of " + std::to_string(needed) + " points";
     check_size(a->cloud, needed, reference_name, why_fit);
     check_size(b->cloud, needed, distorted_name, why_fit);
-    surface_a = detail::estimate_surface(a->cloud.points, *a->search, *fit, o.threads);
-    surface_b = detail::estimate_surface(b->cloud.points, *b->search, *fit, o.threads);
-  }
-  progress.begin("features");
-  a->features = detail::feature_maps(a->cloud, *a->search, fit ? &surface_a : nullptr, k,
-                                     r.attributes, r.estimators, o.threads);
-  b->features = detail::feature_maps(b->cloud, *b->search, fit ? &surface_b : nullptr, k,
-                                     r.attributes, r.estimators, o.threads);
-  progress.begin("similarity maps");
-  const Direction dir = o.direction.value_or(Direction::kSymmetric);
-  MetricResult result;
-  result.metric = "pointssim";
-  if (dir != Direction::kDistToRef) {
-    result.ref_to_dist = score_direction(*a, *b, r, o.threads, o.per_element);  // AB
-  }
-  if (dir != Direction::kRefToDist) {
-    result.dist_to_ref = score_direction(*b, *a, r, o.threads, o.per_element);  // BA
-  }
-  if (result.ref_to_dist && result.dist_to_ref) {
-    result.values = symmetric_values(*result.ref_to_dist, *result.dist_to_ref);
-  } else {
-    result.values = result.any_direction().values;
-  }
-  result.score = *find_value(result.values, r.score_name);
-  drop_nan(result.values, "", result.warnings);
-  if (result.ref_to_dist) drop_nan(result.ref_to_dist->values, "ref-to-dist ", result.warnings);
-  if (result.dist_to_ref) drop_nan(result.dist_to_ref->values, "dist-to-ref ", result.warnings);
-  for (const auto& [cloud, name] :
-       {std::pair{a.get(), &reference_name}, std::pair{b.get(), &distorted_name}}) {
-    if (cloud->cloud.duplicates > 0) {
-      result.warnings.push_back(*name + ": " + std::to_string(cloud->cloud.duplicates) +
-                                " duplicate points fused (pointssim scores distinct positions" +
-                                (colours ? ", colours averaged)" : ")"));
+    for (Scored* s : {a.get(), b.get()}) {
+      s->surface = detail::estimate_surface(s->cloud.points, *s->search, *fit, k, o.threads);
     }
   }
-  nlohmann::json fit_json = nullptr;
-  if (fit) {
-    fit_json = fit->count > 0 ? nlohmann::json{{"method", "knn"}, {"size", fit->count}}
-                              : nlohmann::json{{"method", "radius"}, {"size", fit->radius}};
+  progress.begin("features");
+  for (Scored* s : {a.get(), b.get()}) {
+    s->features = detail::feature_maps(s->cloud, *s->search, fit ? &s->surface : nullptr, k,
+                                       r.attributes, r.estimators, o.threads);
   }
-  result.details = {
-      {"score_value", r.score_name},
-      {"points", {{"reference", a->cloud.points.size()}, {"distorted", b->cloud.points.size()}}},
-      {"duplicates_fused",
-       {{"reference", a->cloud.duplicates}, {"distorted", b->cloud.duplicates}}},
-      {"fit", fit_json}};
-  result.text_note = "[" + r.score_name + "; 1 = identical]";
-  result.provenance.version = kVersion;
-  result.provenance.options = list_json(r);
-  result.provenance.options["direction"] = direction_name(dir);
-  result.provenance.options["neighbours"] = o.neighbours;
-  result.provenance.options["fit"] = fit_json;
+  progress.begin("similarity maps");
+  MetricResult result = score_directions(*a, *b, r, o);
+  describe(result, *a, *b, r, o, fit, {reference_name, distorted_name});
   result.provenance.seconds = seconds_since(start);
   progress.finish();
   return result;

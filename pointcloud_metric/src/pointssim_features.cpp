@@ -168,6 +168,7 @@ FeatureMaps feature_maps(const SsimCloud& cloud, const OrderedSearch& search,
   const Sources sources{cloud, surface, lumas};
   FeatureMaps out;
   out.maps.assign(attributes.size() * estimators.size(), std::vector<double>(n));
+  const bool kept = surface != nullptr && surface->k == k && !surface->nearest.empty();
 #pragma omp parallel num_threads(thread_count(threads))
   {
     std::vector<Neighbour> nb;
@@ -175,7 +176,16 @@ FeatureMaps feature_maps(const SsimCloud& cloud, const OrderedSearch& search,
 #pragma omp for schedule(dynamic, kChunk)
     for (long i = 0; i < static_cast<long>(n); ++i) {
       const auto row = static_cast<std::size_t>(i);
-      search.knn(cloud.points[row], k, nb);
+      if (kept) {
+        // The fit's neighbours, with their squared distances as the search computes them.
+        nb.resize(k);
+        for (std::size_t j = 0; j < k; ++j) {
+          const std::uint32_t r = surface->nearest[row * k + j];
+          nb[j] = {squared_distance(cloud.points[row], cloud.points[r]), r};
+        }
+      } else {
+        search.knn(cloud.points[row], k, nb);
+      }
       for (std::size_t a = 0; a < attributes.size(); ++a) {
         quantities(attributes[a], sources, row, nb, q);
         for (std::size_t e = 0; e < estimators.size(); ++e) {

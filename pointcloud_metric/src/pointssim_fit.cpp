@@ -311,10 +311,14 @@ void OrderedSearch::within(const Vec3& query, double radius, std::vector<Neighbo
 }
 
 SurfaceEstimates estimate_surface(const std::vector<Vec3>& points, const OrderedSearch& search,
-                                  const FitNeighbourhood& fit, int threads) {
+                                  const FitNeighbourhood& fit, std::size_t k, int threads) {
   SurfaceEstimates out;
   out.normals.resize(points.size());
   out.curvatures.resize(points.size());
+  if (fit.count > 0) {
+    out.k = std::min(k, points.size());
+    out.nearest.resize(points.size() * out.k);
+  }
   const long n = static_cast<long>(points.size());
 #pragma omp parallel num_threads(thread_count(threads))
   {
@@ -323,7 +327,11 @@ SurfaceEstimates estimate_surface(const std::vector<Vec3>& points, const Ordered
     for (long i = 0; i < n; ++i) {
       const auto row = static_cast<std::size_t>(i);
       if (fit.count > 0) {
-        search.knn(points[row], fit.count, w.rows);
+        // The nearest max(count, k) in the reference's total order: both neighbourhoods are
+        // prefixes of it.
+        search.knn(points[row], std::max(fit.count, k), w.rows);
+        for (std::size_t j = 0; j < out.k; ++j) out.nearest[row * out.k + j] = w.rows[j].index;
+        if (w.rows.size() > fit.count) w.rows.resize(fit.count);
       } else {
         search.within(points[row], fit.radius, w.rows);
       }

@@ -60,10 +60,15 @@ struct FitNeighbourhood {
 struct SurfaceEstimates {
   std::vector<Vec3> normals;
   std::vector<double> curvatures;
+  /// A knn fit's search also gives the `k` nearest rows of every row (row i's at i * k): the
+  /// features' neighbourhoods, kept so that they are not searched again. Empty otherwise.
+  std::vector<std::uint32_t> nearest;
+  std::size_t k = 0;
 };
 
+/// The normals and curvatures of every row; a knn fit also keeps each row's `k` nearest rows.
 SurfaceEstimates estimate_surface(const std::vector<Vec3>& points, const OrderedSearch& search,
-                                  const FitNeighbourhood& fit, int threads);
+                                  const FitNeighbourhood& fit, std::size_t k, int threads);
 
 /// Each requested estimator of each requested attribute, per row of a cloud:
 /// maps[a * estimators.size() + e] is estimator e of attribute a (in the order of the lists).
@@ -73,7 +78,8 @@ struct FeatureMaps {
 
 /// The feature maps of a cloud over its K nearest rows (self first; pointssim's quantities:
 /// geometry the K - 1 distances, normals the K - 1 angular similarities, curvature and colour
-/// luma the K values). `surface` is needed for normals and curvature.
+/// luma the K values). `surface` is needed for normals and curvature; its kept neighbourhoods are
+/// used when they are the K nearest.
 FeatureMaps feature_maps(const SsimCloud& cloud, const OrderedSearch& search,
                          const SurfaceEstimates* surface, std::size_t k,
                          const std::vector<PointssimAttribute>& attributes,
