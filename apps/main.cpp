@@ -198,7 +198,7 @@ std::string orientation_line() {
   if (!distortions.empty()) line += "Distortions (0 = identical, larger is worse): " + distortions;
   if (!qualities.empty()) {
     line += std::string(line.empty() ? "Q" : "; q") +
-            "ualities (higher is better, inf = identical): " + qualities;
+            "ualities (higher is better; identical inputs score inf in dB, 1 as a similarity): " + qualities;
   }
   return line + ".";
 }

@@ -82,7 +82,8 @@ TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
   EXPECT_NE(help.out.find("Distortions (0 = identical, larger is worse): CMDM, MSDM2, PCQM"),
             std::string::npos)
       << help.out;
-  EXPECT_NE(help.out.find("qualities (higher is better, inf = identical): PSNR, IBSM."),
+  EXPECT_NE(help.out.find("qualities (higher is better; identical inputs score inf in dB, 1 as a "
+                          "similarity): PSNR, PointSSIM, IBSM."),
             std::string::npos)
       << help.out;
   EXPECT_EQ(help.out.find("Scores are distortions"), std::string::npos) << help.out;
