@@ -203,18 +203,17 @@ std::array<double, kTerms> fit_quadric(FitWorkspace& w) {
           c[3] * (1 / (sy * sy)), c[4] * (1 / sy),        c[5]};
 }
 
-// Normal and curvature of one row from its neighbourhood w.rows (pc_estimate_norm_curv_qfit).
-void fit_row(const std::vector<Vec3>& points, std::size_t row, FitWorkspace& w, Vec3& normal,
-             double& curvature) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  normal = Vec3{nan, nan, nan};
-  curvature = nan;
-  // One point: polyfitn_c's sample deviation of a single row is 0 / 0 under Octave, and the
-  // reference keeps NaN.
-  if (w.rows.size() < 2) return;
+/// What the fit gives a row.
+struct RowEstimate {
+  Vec3 normal;
+  double curvature;
+};
+
+// The principal frame of the neighbourhood w.rows, and its local coordinates in w.patch:
+// (P - mean) E - (p - mean) E.
+Eigen::Matrix3d local_patch(const std::vector<Vec3>& points, std::size_t row, FitWorkspace& w) {
   Eigen::Vector3d mean;
   const Eigen::Matrix3d frame = principal_frame(population_covariance(points, w.rows, mean));
-  // Local coordinates: (P - mean) E - (p - mean) E.
   const Eigen::Vector3d origin = project(points[row], mean, frame);
   const std::size_t n = w.rows.size();
   w.patch.x.resize(n);
@@ -226,25 +225,37 @@ void fit_row(const std::vector<Vec3>& points, std::size_t row, FitWorkspace& w, 
     w.patch.y[i] = q(1) - origin(1);
     w.patch.z[i] = q(2) - origin(2);
   }
+  return frame;
+}
+
+// Normal and curvature of one row from its neighbourhood w.rows (pc_estimate_norm_curv_qfit);
+// NaN where the reference leaves NaN.
+RowEstimate fit_row(const std::vector<Vec3>& points, std::size_t row, FitWorkspace& w) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const RowEstimate none{Vec3{nan, nan, nan}, nan};
+  // One point: polyfitn_c's sample deviation of a single row is 0 / 0 under Octave, and the
+  // reference keeps NaN.
+  if (w.rows.size() < 2) return none;
+  const Eigen::Matrix3d frame = local_patch(points, row, w);
   const auto [p20, p11, p10, p02, p01, p00] = fit_quadric(w);
   if (std::isnan(p20) && std::isnan(p11) && std::isnan(p10) && std::isnan(p02) && std::isnan(p01) &&
       std::isnan(p00)) {
-    return;  // the reference skips a fit whose coefficients are all NaN
+    return none;  // the reference skips a fit whose coefficients are all NaN
   }
   // Normal [-p10, -p01, 1] normalised, back to the cloud's axes (times E'), normalised again.
-  const double local[3] = {-p10, -p01, 1};
-  const double local_norm = std::sqrt((local[0] * local[0] + local[1] * local[1]) + 1);
-  const double u[3] = {local[0] / local_norm, local[1] / local_norm, local[2] / local_norm};
+  const double local_norm = std::sqrt((p10 * p10 + p01 * p01) + 1);
+  const double u[3] = {-p10 / local_norm, -p01 / local_norm, 1 / local_norm};
   double world[3];
-  for (int j = 0; j < 3; ++j)
+  for (int j = 0; j < 3; ++j) {
     world[j] = (u[0] * frame(j, 0) + u[1] * frame(j, 1)) + u[2] * frame(j, 2);
+  }
   const double world_norm =
       std::sqrt((world[0] * world[0] + world[1] * world[1]) + world[2] * world[2]);
-  normal = Vec3{world[0] / world_norm, world[1] / world_norm, world[2] / world_norm};
   // The reference's curvature as coded (not the textbook mean curvature: the gradient factors
   // are swapped and the cross term differs; SPEC-POINTSSIM step 3).
-  curvature = ((1 + p10 * p10) * p20 + (1 + p01 * p01) * p02 - 4 * p20 * p02 * p11) /
-              std::pow((1 + p01 * p01) + p10 * p10, 1.5);
+  const double curvature = ((1 + p10 * p10) * p20 + (1 + p01 * p01) * p02 - 4 * p20 * p02 * p11) /
+                           std::pow((1 + p01 * p01) + p10 * p10, 1.5);
+  return {Vec3{world[0] / world_norm, world[1] / world_norm, world[2] / world_norm}, curvature};
 }
 
 }  // namespace
@@ -335,7 +346,9 @@ SurfaceEstimates estimate_surface(const std::vector<Vec3>& points, const Ordered
       } else {
         search.within(points[row], fit.radius, w.rows);
       }
-      fit_row(points, row, w, out.normals[row], out.curvatures[row]);
+      const RowEstimate e = fit_row(points, row, w);
+      out.normals[row] = e.normal;
+      out.curvatures[row] = e.curvature;
     }
   }
   return out;
