@@ -192,7 +192,7 @@ bool QuadricFitter::fit_well_posed(const Vec3& origin, const std::vector<Vec3>& 
 }
 
 QuadricFit QuadricFitter::fit_as_reference(const Vec3& origin, const std::vector<Vec3>& points,
-                                           const std::vector<Neighbour>& neighbours) {
+                                          const std::vector<Neighbour>& neighbours) {
   const Eigen::Index n = static_cast<Eigen::Index>(neighbours.size());
   if (n == 0) return QuadricFit{origin, 0.0, true};
 

@@ -12,7 +12,7 @@
 namespace qm3d::pointcloud::detail {
 
 struct QuadricFit {
-  Vec3 foot{0, 0, 0};  ///< origin + f n: the origin projected onto the fitted surface
+  Vec3 foot{0, 0, 0};         ///< origin + f n: the origin projected onto the fitted surface
   /// H at the origin (in inverse coordinate units), signed along the normal, whose orientation
   /// is the eigen-solver's (either path may choose the other one: |H| and `foot` do not depend
   /// on it).
@@ -33,8 +33,8 @@ struct QuadricFit {
 ///   a design whose unit-column form is not clearly well-conditioned, non-finite input), where the
 ///   reference's rounding decides the value (SPEC-PCQM §9.5).
 ///
-/// The reference's path is bit-for-bit its arithmetic: raw second moment minus the mean's outer
-/// product, `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
+/// The reference's path is bit-for-bit its arithmetic: raw second moment minus the mean's outer product,
+/// `SelfAdjointEigenSolver<MatrixXd>` (the dynamic-size solver: the fixed 3x3 one rounds
 /// differently), frame t1 = largest, t2 = middle, n = smallest eigenvector, coordinates relative
 /// to the origin, `ColPivHouseholderQR<MatrixXd>` (its basic solution when there are fewer than
 /// six points). With no neighbour at all the result is the origin and H = 0, which is what the
