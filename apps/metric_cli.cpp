@@ -49,6 +49,25 @@ std::string option_help(const std::vector<const MetricSpec*>& specs, const std::
   return text;
 }
 
+// The option with the widest range among the metrics that have one of its name (psnr's
+// neighbours 1..2, pointssim's 3..): the tool takes a value any of them accepts, and each
+// metric checks its own range when it runs (MetricSpec::complete).
+OptionSpec widest_range(const std::vector<const MetricSpec*>& specs, OptionSpec o) {
+  for (const MetricSpec* spec : specs) {
+    for (const OptionSpec& other : spec->options) {
+      if (other.name != o.name || !other.default_value.is_number()) continue;
+      if (other.min < o.min) {
+        o.min = other.min;
+        o.min_exclusive = other.min_exclusive;
+      } else if (other.min == o.min) {
+        o.min_exclusive = o.min_exclusive && other.min_exclusive;
+      }
+      o.max = std::max(o.max, other.max);
+    }
+  }
+  return o;
+}
+
 }  // namespace
 
 std::string cli_flag(const std::string& option) {
@@ -94,7 +113,7 @@ void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& spe
       if (!o.choices.empty()) opt->check(CLI::IsMember(o.choices));
       if (d.is_number()) {
         opt->type_name(d.is_number_integer() ? "INT" : "FLOAT");
-        opt->check(range_check(o));
+        opt->check(range_check(widest_range(specs, o)));
       }
       cli.given[o.name] = opt;
     }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -39,6 +39,11 @@
 #            (bench/pointcloud/gen_voxel_sphere.py). Targets: CPU <= 1/20 of the reference's;
 #            the 1M pair in seconds (reported, not enforced); every score the same on every run
 #            and the vox1 scores equal to the table's (1e-10 relative).
+#   pointssim PointSSIM on the gen_big_cloud.py sphere pairs (normals and curvature fitted on 12
+#            neighbours): every value (7 estimators x 3 poolings x 4 attributes) on 5k points, where
+#            the reference (mmspg/pointssim in Octave) takes ~36 s (target >= 100 x: <= 0.36 s),
+#            and the default estimator on 100k and 1M points (linear in N; target: 1M in seconds);
+#            the score must be the same in every run (reported, not enforced: the times)
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
 #            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
@@ -488,6 +493,27 @@ if [ "$WHICH" = all ] || [ "$WHICH" = ibsm ]; then
   for line in "${summary[@]}"; do echo "$line"; done
 fi
 
+if [ "$WHICH" = all ] || [ "$WHICH" = pointssim ]; then
+  gen_cloud 5000 5k; gen_cloud 100000 100k; gen_cloud 1000000 1000k
+  echo
+  echo "| case | threads | wall | CPU | peak RSS | score | target |"
+  echo "|---|---|---|---|---|---|---|"
+  for spec in "5k|all|<= 0.36 s (100 x faster than the reference's ~36 s)" "100k|var|linear in N" \
+              "1000k|var|<= 10 s"; do
+    IFS='|' read -r tag estimators target <<< "$spec"
+    SCORES="$TMP/scores"; : > "$SCORES"
+    measure "$TMP/case" "$QM3D" --threads "$THREADS" --quiet pointssim \
+      "$DATA/sphere_${tag}_ref_bin.ply" "$DATA/sphere_${tag}_cnoise10_bin.ply" --fit-knn 12 \
+      --estimators "$estimators" --poolings all --attributes all --csv
+    SCORES=""
+    if [ "$(sort -u "$TMP/scores" | wc -l)" != 1 ]; then
+      echo "FAIL: PointSSIM $tag: the score differs between runs" >&2; STATUS=1
+    fi
+    printf '| PointSSIM sphere %s, estimators %s | %s | %s s | %s s | %s MB | %s | %s |\n' "$tag" \
+      "$estimators" "$THREADS" "$(stats "$TMP/case" 0)" "$(stats "$TMP/case" 1)" \
+      "$(stats "$TMP/case" 2 1024)" "$(head -1 "$TMP/scores")" "$target"
+  done
+fi
 if [ "$WHICH" = vs-reference ]; then
   MEPP2="${QM3D_MEPP2_CMDM:-}" PCQM_REF="${QM3D_PCQM_REF:-}"
   [ -n "$MEPP2$PCQM_REF" ] || {

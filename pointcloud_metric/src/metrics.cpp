@@ -20,6 +20,7 @@ void register_metrics(Registry& registry) {
   registry.add(dlab_spec(registry.colour_matcher()));
   registry.add(graphsim_spec());
   registry.add(msgraphsim_spec());
+  registry.add(pointssim_spec());
 }
 
 }  // namespace qm3d::pointcloud

@@ -100,11 +100,9 @@ double smallest_singular_value_bound(const double r[6][7], const double norm0[6]
   return 1 / std::sqrt(frobenius2);
 }
 
-// Householder QR of the n x 6 design held column by column in `col` (col[6] = the heights), no
-// pivoting; solves R c = Q^T z. False when the design with unit columns is not clearly
-// well-conditioned (kFastSingularBound; a pivot |R(k,k)| below that share of its column's norm
-// stops early): the fit is then left to the reference's QR.
-bool solve_well_posed(double* const col[7], std::size_t n, double c[6]) {
+}  // namespace
+
+bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]) {
   double norm0[6];
   for (int k = 0; k < 6; ++k) {
     double sum = 0;
@@ -141,8 +139,6 @@ bool solve_well_posed(double* const col[7], std::size_t n, double c[6]) {
   }
   return true;
 }
-
-}  // namespace
 
 double graph_mean_curvature(double fx, double fy, double fxx, double fyy, double fxy) {
   return 0.5 * ((1 + fx * fx) * fyy + (1 + fy * fy) * fxx - 2 * fxy * fx * fy) /
@@ -187,7 +183,7 @@ bool QuadricFitter::fit_well_posed(const Vec3& origin, const std::vector<Vec3>& 
     col[6][i] = v0 * normal(0) + v1 * normal(1) + v2 * normal(2);
   }
   double c[6];
-  if (!solve_well_posed(col, n, c)) return false;
+  if (!solve_well_posed_least_squares(col, n, c)) return false;
   out.foot = Vec3{origin[0] + c[5] * normal(0), origin[1] + c[5] * normal(1),
                   origin[2] + c[5] * normal(2)};
   out.mean_curvature = graph_mean_curvature(c[3], c[4], 2 * c[0], 2 * c[1], c[2]);

@@ -63,6 +63,15 @@ class QuadricFitter {
   Eigen::VectorXd heights_;
 };
 
+/// The least-squares solution c of the n x 6 system held column by column in `col` (col[0..5]
+/// the design, col[6] the right-hand side; each n long, overwritten), by an unpivoted
+/// Householder QR. False (c undefined) when the design with unit columns is not clearly
+/// well-conditioned (its smallest singular value below 1e-2, or a pivot below that share of its
+/// column's norm): the solution would then depend on the solver's rounding, and the caller
+/// decides (PCQM: the reference's QR; PointSSIM: a minimum-norm solve). Both quadric fits of
+/// the module (QuadricFitter, pointssim_fit.cpp) solve their well-posed systems here.
+bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]);
+
 /// Mean curvature of the graph of z = f(x, y) at the origin from f's first and second
 /// derivatives (do Carmo, "Differential Geometry of Curves and Surfaces", 3-3, ex. 21), written
 /// as the reference writes it.

@@ -69,11 +69,9 @@ def _arrays_of(obj, argument):
             raise ValueError(f"{argument}: the Open3D TriangleMesh has no vertex colours")
         return (_np.asarray(obj.vertices), _np.asarray(obj.vertex_colors),
                 _np.asarray(obj.triangles), f"<{argument}: Open3D TriangleMesh>")
-    if _looks_like_open3d_cloud(obj):
-        if not obj.has_colors():
-            raise ValueError(f"{argument}: the Open3D PointCloud has no colours")
-        return (_np.asarray(obj.points), _np.asarray(obj.colors), None,
-                f"<{argument}: Open3D PointCloud>")
+    if _looks_like_open3d_cloud(obj):  # without colours: for the metrics that need none
+        colors = _np.asarray(obj.colors) if obj.has_colors() else None
+        return (_np.asarray(obj.points), colors, None, f"<{argument}: Open3D PointCloud>")
     if isinstance(obj, dict):
         unknown = set(obj) - {"positions", "colors", "faces", "warnings"}  # read_mesh()'s dict
         if unknown or "positions" not in obj:

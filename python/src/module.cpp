@@ -147,7 +147,8 @@ Input input_from_arrays(const py::array& positions, const py::object& colors,
     mesh::MeshFile m = mesh::mesh_from_arrays(std::move(p), std::move(c), std::move(t), name);
     return Input::from_mesh(MeshData{std::move(m.mesh), has_colors, std::move(m.warnings)}, name);
   }
-  if (c.empty()) bad_argument("colors", "a point cloud needs one colour per point");
+  // A cloud without colours (colors None) is scored by the metrics that need none (pointssim's
+  // geometry); the others refuse it naming the input.
   return Input::from_cloud(ColoredCloud{std::move(p), std::move(c)}, name);
 }
 

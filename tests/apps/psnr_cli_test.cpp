@@ -83,7 +83,8 @@ TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
             std::string::npos)
       << help.out;
   EXPECT_NE(help.out.find("qualities (higher is better; in dB inf = identical, similarities 1 = "
-                          "identical): PSNR, GraphSIM, MS-GraphSIM, IBSM."),
+                          "identical): PSNR, GraphSIM, MS-GraphSIM, "
+                          "PointSSIM, IBSM."),
             std::string::npos)
       << help.out;
   EXPECT_EQ(help.out.find("Scores are distortions"), std::string::npos) << help.out;

@@ -29,12 +29,17 @@ MetricSpec dlab_spec(SurfaceColourMatcher on_surfaces);
 MetricSpec graphsim_spec();
 MetricSpec msgraphsim_spec();
 
+/// "pointssim" (pointssim.cpp): PointSSIM of two clouds (meshes by their vertices), the numbers
+/// of mmspg/pointssim (qm3d/pointcloud/pointssim.h); options neighbours, fit_knn, fit_radius,
+/// estimators, poolings, attributes. Run by compare only when asked for.
+MetricSpec pointssim_spec();
+
 /// Samples drawn from each mesh by pcqm_sampled when no points / density is given.
 inline constexpr int kDefaultSampledPoints = 20000;
 
 /// Registers the cloud reader, PCQM, when a surface sampler is registered (the mesh module,
-/// registered first) pcqm_sampled, psnr, dlab (with the registry's colour matcher), graphsim and
-/// msgraphsim.
+/// registered first) pcqm_sampled, psnr, dlab (with the registry's colour matcher), graphsim,
+/// msgraphsim and pointssim.
 void register_metrics(Registry& registry);
 
 }  // namespace qm3d::pointcloud
