@@ -221,7 +221,86 @@ std::vector<KeypointValues> all_keypoint_values(const LoadedMesh& ref, const Loa
   return values;
 }
 
+// The per-keypoint values of the patches that entered the score, at their keypoints.
+void keypoint_values_of(const GeodesicPsimResult& g, DirectionResult& d) {
+  std::vector<double> flag, pcs, dmc, pca, pcv;
+  for (const GeodesicPsimKeypoint& k : g.keypoints) {
+    if (!k.pooled) continue;
+    d.element_positions.push_back(k.position);
+    d.per_element.push_back(k.local_score());
+    flag.push_back(k.flag);
+    pcs.push_back(k.pcs);
+    dmc.push_back(k.dmc);
+    pca.push_back(yuv_mix(k.lm, k.c1m, k.c2m));
+    pcv.push_back(yuv_mix(k.lvar, k.c1var, k.c2var));
+  }
+  d.per_element_values = {{"flag", flag}, {"pcs", pcs}, {"dmc", dmc}, {"pca", pca}, {"pcv", pcv}};
+}
+
+void check_textured_obj(const Input& in) {
+  if (in.path().empty() || in.format() != FileFormat::kObj) {
+    throw FormatError(in.name() +
+                      ": geodesicpsim reads textured OBJ files (OBJ + MTL + texture image)");
+  }
+}
+
+MetricResult run_geodesicpsim(const MetricSpec&, const Input& ref, const Input& dist,
+                              const RunOptions& run, const OptionValues& v) {
+  check_textured_obj(ref);
+  check_textured_obj(dist);
+  GeodesicPsimOptions o;
+  static_cast<RunOptions&>(o) = run;
+  o.keypoints = v.at("keypoints").get<int>();
+  const GeodesicPsimResult g = compute_geodesicpsim(ref.path(), dist.path(), o);
+  MetricResult r;
+  r.metric = "geodesicpsim";
+  r.values = {{"pcs", g.pcs}, {"dmc", g.dmc}, {"pca", g.pca}, {"pcv", g.pcv}};
+  DirectionResult d;
+  d.score = g.score;
+  d.values = r.values;
+  if (run.per_element) keypoint_values_of(g, d);
+  r.ref_to_dist = std::move(d);
+  r.score = g.score;
+  r.details = {{"keypoints", g.keypoints_used},   {"effective_patches", g.effective_patches},
+               {"flag1", g.flag1},                {"flag2", g.flag2},
+               {"flag3", g.flag3},                {"skipped", g.skipped},
+               {"subdivided", g.subdivided}};
+  r.text_note = std::to_string(g.effective_patches) + " of " + std::to_string(g.keypoints_used) +
+                " keypoint patches pooled";
+  r.provenance.options = v;
+  return r;
+}
+
 }  // namespace
+
+MetricSpec geodesicpsim_spec() {
+  MetricSpec s;
+  s.name = "geodesicpsim";
+  s.title = "GeodesicPSIM";
+  s.reproduces = "Qi-Yangsjtu/GeodesicPSIM @ 3e06453";
+  s.summary =
+      "Textured-mesh quality by geodesic patch similarity around farthest-point keypoints (colour "
+      "smoothness, mean curvature, texel mean and variance); two textured OBJ files; score in "
+      "[0, 1], 1 = identical";
+  s.higher_is_better = true;
+  s.applies_to = AppliesTo::kMeshes;
+  s.reads = Input::Kind::kMesh;
+  s.reads_files = true;    // the OBJ and its texture as the reference reads them (float32)
+  s.in_compare = false;    // needs textured OBJ files; asked for by name
+  s.default_direction = Direction::kRefToDist;
+  s.direction_help = "keypoints on the reference, patches in both meshes (one direction)";
+  s.symmetric_rule = "the one direction (keypoints on the reference)";
+  s.per_element_on_input = false;  // one value per keypoint (a cleaned reference vertex)
+  s.per_element_positions = true;
+  s.value_names = {"pcs", "dmc", "pca", "pcv"};
+  s.quality_value_names = s.value_names;
+  s.options = {{"keypoints",
+                "Farthest-point keypoints on the reference (the reference tool's --N); at most "
+                "the reference's vertex count",
+                5000, {}, 1, 1e9}};
+  s.run = run_geodesicpsim;
+  return s;
+}
 
 double GeodesicPsimKeypoint::local_score() const {
   if (!pooled) return std::numeric_limits<double>::quiet_NaN();
