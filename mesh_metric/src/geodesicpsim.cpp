@@ -8,10 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "geodesicpsim_internal.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/progress.h"
+#include "qm3d/mesh/texture.h"
 
 namespace qm3d::mesh {
 namespace {
@@ -45,7 +48,8 @@ double yuv_mix(double y, double u, double v) {
 
 struct LoadedMesh {
   GpMesh mesh;
-  GpTexture texture;
+  std::filesystem::path texture_file;  // the MTL's map_Kd
+  std::shared_ptr<const GpTexture> texture;
 };
 
 LoadedMesh load(const std::filesystem::path& path) {
@@ -53,7 +57,7 @@ LoadedMesh load(const std::filesystem::path& path) {
   {
     const std::string text = read_file_bytes(path);
     m.mesh = gpsim::read_obj_as_reference(text, path.string());
-    m.texture = gpsim::read_obj_texture(text, path);
+    m.texture_file = obj_texture_file(text, path);
   }
   m.mesh = gpsim::clean_mesh(std::move(m.mesh));
   if (m.mesh.f.empty()) throw NumericError(path.string() + ": no face left after cleaning");
@@ -63,13 +67,14 @@ LoadedMesh load(const std::filesystem::path& path) {
 gpsim::PatchSource patch_source(const LoadedMesh& m, gpsim::NearestVertex& nearest) {
   gpsim::PatchSource s;
   s.mesh = &m.mesh;
-  s.texture = &m.texture;
+  s.texture = m.texture.get();
   s.nearest = &nearest;
   s.face_offsets.assign(m.mesh.v.size() + 1, 0);
   for (const auto& f : m.mesh.f) {
     for (int v : f) ++s.face_offsets[v + 1];
   }
-  for (std::size_t i = 1; i < s.face_offsets.size(); ++i) s.face_offsets[i] += s.face_offsets[i - 1];
+  for (std::size_t i = 1; i < s.face_offsets.size(); ++i)
+    s.face_offsets[i] += s.face_offsets[i - 1];
   s.faces.resize(s.face_offsets.back());
   std::vector<int> fill(s.face_offsets.begin(), s.face_offsets.end() - 1);
   for (std::size_t f = 0; f < m.mesh.f.size(); ++f) {
@@ -171,8 +176,9 @@ void pool(const FlagSums& f1, const FlagSums& f2, const FlagSums& f3, GeodesicPs
 }
 
 void pool_keypoints(const std::vector<KeypointValues>& values, GeodesicPsimResult& r) {
-  const bool any12 = std::any_of(values.begin(), values.end(),
-                                 [](const KeypointValues& v) { return v.flag == 1 || v.flag == 2; });
+  const bool any12 = std::any_of(values.begin(), values.end(), [](const KeypointValues& v) {
+    return v.flag == 1 || v.flag == 2;
+  });
   FlagSums sums[4];
   for (std::size_t k = 0; k < values.size(); ++k) {
     const KeypointValues& v = values[k];
@@ -200,7 +206,8 @@ void pool_keypoints(const std::vector<KeypointValues>& values, GeodesicPsimResul
   }
   r.effective_patches = any12 ? r.flag1 + r.flag2 : r.flag3;
   if (r.effective_patches == 0) {
-    throw NumericError("geodesicpsim: no keypoint has a patch of more than 3 vertices in both meshes");
+    throw NumericError(
+        "geodesicpsim: no keypoint has a patch of more than 3 vertices in both meshes");
   }
   pool(sums[1], sums[2], sums[3], r);
 }
@@ -211,10 +218,10 @@ std::vector<KeypointValues> all_keypoint_values(const LoadedMesh& ref, const Loa
   gpsim::NearestVertex ref_nearest(ref.mesh.v), dis_nearest(dis.mesh.v);
   const gpsim::PatchSource rs = patch_source(ref, ref_nearest), ds = patch_source(dis, dis_nearest);
   const int n = static_cast<int>(keypoints.size());
-  const int computed = n < kBlockDivisor ? n : std::min(n, (kBlockDivisor + 1) * (n / kBlockDivisor));
+  const int computed =
+      n < kBlockDivisor ? n : std::min(n, (kBlockDivisor + 1) * (n / kBlockDivisor));
   std::vector<KeypointValues> values(keypoints.size());
-  const int t = threads > 0 ? threads : omp_get_max_threads();
-#pragma omp parallel for schedule(dynamic, 16) num_threads(t)
+#pragma omp parallel for schedule(dynamic, 16) num_threads(threads)
   for (int k = 0; k < computed; ++k) {
     values[k] = gpsim::keypoint_values(rs, ds, keypoints[k], threshold);
   }
@@ -261,9 +268,12 @@ MetricResult run_geodesicpsim(const MetricSpec&, const Input& ref, const Input& 
   if (run.per_element) keypoint_values_of(g, d);
   r.ref_to_dist = std::move(d);
   r.score = g.score;
-  r.details = {{"keypoints", g.keypoints_used},   {"effective_patches", g.effective_patches},
-               {"flag1", g.flag1},                {"flag2", g.flag2},
-               {"flag3", g.flag3},                {"skipped", g.skipped},
+  r.details = {{"keypoints", g.keypoints_used},
+               {"effective_patches", g.effective_patches},
+               {"flag1", g.flag1},
+               {"flag2", g.flag2},
+               {"flag3", g.flag3},
+               {"skipped", g.skipped},
                {"subdivided", g.subdivided}};
   r.text_note = std::to_string(g.effective_patches) + " of " + std::to_string(g.keypoints_used) +
                 " keypoint patches pooled";
@@ -285,8 +295,8 @@ MetricSpec geodesicpsim_spec() {
   s.higher_is_better = true;
   s.applies_to = AppliesTo::kMeshes;
   s.reads = Input::Kind::kMesh;
-  s.reads_files = true;    // the OBJ and its texture as the reference reads them (float32)
-  s.in_compare = false;    // needs textured OBJ files; asked for by name
+  s.reads_files = true;  // the OBJ and its texture as the reference reads them (float32)
+  s.in_compare = false;  // needs textured OBJ files; asked for by name
   s.default_direction = Direction::kRefToDist;
   s.direction_help = "keypoints on the reference, patches in both meshes (one direction)";
   s.symmetric_rule = "the one direction (keypoints on the reference)";
@@ -297,7 +307,10 @@ MetricSpec geodesicpsim_spec() {
   s.options = {{"keypoints",
                 "Farthest-point keypoints on the reference (the reference tool's --N); at most "
                 "the reference's vertex count",
-                5000, {}, 1, 1e9}};
+                5000,
+                {},
+                1,
+                1e9}};
   s.run = run_geodesicpsim;
   return s;
 }
@@ -311,20 +324,34 @@ GeodesicPsimResult compute_geodesicpsim(const std::filesystem::path& reference_o
                                         const std::filesystem::path& distorted_obj,
                                         const GeodesicPsimOptions& options) {
   if (options.keypoints < 1) throw std::invalid_argument("keypoints: must be at least 1");
+  ProgressSteps progress(options.progress, 5);
+  progress.begin("reading");
   LoadedMesh ref = load(reference_obj);
   LoadedMesh dis = load(distorted_obj);
+  // One copy of a texture both meshes name (a geometry-only distortion).
+  ref.texture = std::make_shared<const GpTexture>(gpsim::read_texture_8bit(ref.texture_file));
+  std::error_code same_error;
+  dis.texture = std::filesystem::equivalent(ref.texture_file, dis.texture_file, same_error)
+                    ? ref.texture
+                    : std::make_shared<const GpTexture>(gpsim::read_texture_8bit(dis.texture_file));
   GeodesicPsimResult r;
+  progress.begin("equalising face counts");
   const gpsim::Subdivided sub = gpsim::equalise_face_counts(ref.mesh, dis.mesh);
   r.subdivided = sub == gpsim::Subdivided::kReference   ? "reference"
                  : sub == gpsim::Subdivided::kDistorted ? "distorted"
                                                         : "none";
   r.keypoints_used = std::min<int>(options.keypoints, static_cast<int>(ref.mesh.v.size()));
-  const std::vector<gpsim::P3> keypoints = gpsim::farthest_points(ref.mesh.v, r.keypoints_used);
+  progress.begin("keypoints");
+  const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const std::vector<gpsim::P3> keypoints =
+      gpsim::farthest_points(ref.mesh.v, r.keypoints_used, threads);
   const double threshold = kPatchRadiusPerBox * largest_box_side(ref.mesh.v) * kPatchRadiusHalf;
-  const auto values = all_keypoint_values(ref, dis, keypoints, threshold, options.threads);
+  progress.begin("patches", 2);
+  const auto values = all_keypoint_values(ref, dis, keypoints, threshold, threads);
   r.keypoints.resize(keypoints.size());
   for (std::size_t k = 0; k < keypoints.size(); ++k) r.keypoints[k].position = keypoints[k];
   pool_keypoints(values, r);
+  progress.finish();
   return r;
 }
 

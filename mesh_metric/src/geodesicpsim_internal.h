@@ -37,10 +37,10 @@ struct GpTexture {
 /// (non-triangles, corners without UV, indices out of range, no faces, no UVs).
 GpMesh read_obj_as_reference(const std::string& text, const std::string& name);
 
-/// The texture an OBJ's material names (`map_Kd` of its MTL), decoded to 8-bit RGB (stb).
-/// InputError / FormatError naming the file at fault (no mtllib, no map_Kd, several textures,
-/// a missing or undecodable image).
-GpTexture read_obj_texture(const std::string& obj_text, const std::filesystem::path& obj_path);
+/// A texture image decoded to 8-bit RGB (stb), as the reference's OpenCV imread(path,
+/// IMREAD_COLOR) reads a PNG. InputError / FormatError naming the file when it is missing or
+/// cannot be decoded.
+GpTexture read_texture_8bit(const std::filesystem::path& file);
 
 /// The reference's cleaning: single UV wrap, unreferenced vertices / UVs dropped, equal positions
 /// and UVs merged, degenerate and duplicate faces dropped (SPEC step 2).
@@ -53,8 +53,8 @@ enum class Subdivided { kNone = 0, kReference = 1, kDistorted = 2 };
 Subdivided equalise_face_counts(GpMesh& reference, GpMesh& distorted);
 
 /// Deterministic farthest-point keypoints of `vertices`: the first is vertex 0, each next the
-/// farthest from those chosen (ties to the lowest index).
-std::vector<P3> farthest_points(const std::vector<P3>& vertices, int count);
+/// farthest from those chosen (ties to the lowest index); `threads` OpenMP threads (> 0).
+std::vector<P3> farthest_points(const std::vector<P3>& vertices, int count, int threads);
 
 /// Nearest vertex search with the reference's tie rule (lowest index among equal distances).
 class NearestVertex {
@@ -65,9 +65,9 @@ class NearestVertex {
 
  private:
   struct Node {
-    int begin, end;     // range of order_
+    int begin, end;  // range of order_
     int left = -1, right = -1;
-    int axis = -1;      // -1: leaf
+    int axis = -1;  // -1: leaf
     double split = 0;
   };
   int build(int begin, int end);

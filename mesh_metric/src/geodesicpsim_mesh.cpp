@@ -13,7 +13,6 @@
 #include "geodesicpsim_internal.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/mesh/texture.h"
 
 namespace qm3d::mesh::gpsim {
 namespace {
@@ -25,7 +24,8 @@ namespace {
 bool is_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
 
 // Splits one line into whitespace-separated words (as std::istringstream >> word does).
-void words_of(const char* begin, const char* end, std::vector<std::pair<const char*, const char*>>& out) {
+void words_of(const char* begin, const char* end,
+              std::vector<std::pair<const char*, const char*>>& out) {
   out.clear();
   const char* p = begin;
   while (p < end) {
@@ -138,8 +138,7 @@ GpMesh read_obj_as_reference(const std::string& text, const std::string& name) {
   return m;
 }
 
-GpTexture read_obj_texture(const std::string& obj_text, const std::filesystem::path& obj_path) {
-  const std::filesystem::path file = obj_texture_file(obj_text, obj_path);
+GpTexture read_texture_8bit(const std::filesystem::path& file) {
   const std::string bytes = read_file_bytes(file, kMaxTextureBytes);
   if (bytes.size() > static_cast<std::size_t>(INT_MAX)) fail(file.string(), "image too large");
   constexpr int kRgb = 3;  // OpenCV imread(path, IMREAD_COLOR) in the reference: 8-bit colour
@@ -220,7 +219,8 @@ double face_size(const GpMesh& m, const Tri& f) {
 
 struct TriHash {
   std::size_t operator()(const Tri& t) const {
-    return (static_cast<std::size_t>(t[0]) * 73856093u) ^ (static_cast<std::size_t>(t[1]) * 19349663u) ^
+    return (static_cast<std::size_t>(t[0]) * 73856093u) ^
+           (static_cast<std::size_t>(t[1]) * 19349663u) ^
            (static_cast<std::size_t>(t[2]) * 83492791u);
   }
 };
@@ -265,7 +265,9 @@ GpMesh clean_mesh(GpMesh m) {
 
 namespace {
 
-P3 mid(const P3& a, const P3& b) { return {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2}; }
+P3 mid(const P3& a, const P3& b) {
+  return {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+}
 P2 mid(const P2& a, const P2& b) { return {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2}; }
 
 // Appends face i of `a` to `out` with its own three corners (positions and UVs), split into four
@@ -287,7 +289,8 @@ void append_face(const GpMesh& a, std::size_t i, bool split, GpMesh& out) {
                                Tri{a31, a23, base + 2}});
   }
   out.ft.resize(out.f.size());
-  for (std::size_t k = out.ft.size() - (split ? 4 : 1); k < out.ft.size(); ++k) out.ft[k] = out.f[k];
+  for (std::size_t k = out.ft.size() - (split ? 4 : 1); k < out.ft.size(); ++k)
+    out.ft[k] = out.f[k];
 }
 
 GpMesh midpoint_subdivision(GpMesh m, int rounds) {
@@ -303,7 +306,8 @@ GpMesh midpoint_subdivision(GpMesh m, int rounds) {
 // threshold, so ties all split).
 GpMesh target_subdivision(const GpMesh& m, std::size_t target_faces) {
   const std::size_t count = m.f.size();
-  const auto to_split = static_cast<std::size_t>(std::ceil((double(target_faces) - double(count)) / 3.0));
+  const auto to_split =
+      static_cast<std::size_t>(std::ceil((double(target_faces) - double(count)) / 3.0));
   std::vector<double> size(count);
   for (std::size_t i = 0; i < count; ++i) size[i] = face_size(m, m.f[i]);
   std::vector<double> sorted = size;
@@ -353,20 +357,24 @@ double distance(const P3& a, const P3& b) {
 
 }  // namespace
 
-std::vector<P3> farthest_points(const std::vector<P3>& vertices, int count) {
+// Below this many vertices the distance updates run on one thread: a parallel region per keypoint
+// costs more than it saves (5000 regions of 20k distances: slower on 2 threads than on one).
+constexpr std::ptrdiff_t kParallelFpsVertices = 1 << 18;
+
+std::vector<P3> farthest_points(const std::vector<P3>& vertices, int count, int threads) {
   std::vector<P3> out;
   out.reserve(static_cast<std::size_t>(count));
   out.push_back(vertices[0]);  // the reference starts at vertex 0 (its random start is disabled)
   std::vector<double> d(vertices.size());
   const auto n = static_cast<std::ptrdiff_t>(vertices.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelFpsVertices)
   for (std::ptrdiff_t j = 0; j < n; ++j) d[j] = distance(vertices[j], out[0]);
   for (int i = 1; i < count; ++i) {
     // std::max_element: the first of equal maxima.
     const auto far = static_cast<std::size_t>(std::max_element(d.begin(), d.end()) - d.begin());
     out.push_back(vertices[far]);
     const P3 k = vertices[far];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads) if (n >= kParallelFpsVertices)
     for (std::ptrdiff_t j = 0; j < n; ++j) d[j] = std::min(distance(vertices[j], k), d[j]);
   }
   return out;

@@ -24,7 +24,7 @@ struct Patch {
   std::vector<P2> uv;  // the patch's UVs as read (ascending global UV order)
   std::vector<Tri> ft;
   int centre = 0;
-  double shift = 0;  // distance from the keypoint to the centre vertex
+  double shift = 0;                        // distance from the keypoint to the centre vertex
   std::vector<std::array<P2, 3>> face_uv;  // each face's corner UVs after the last shrink
   std::vector<Yuv> colour;                 // each vertex's colour after the last shrink
 };
@@ -283,7 +283,8 @@ int face_texels(const std::array<P2, 3>& uv, const GpTexture& tex, std::array<do
       const float a1 = triangle_area(x, y, ax, ay, bx, by);
       const float a2 = triangle_area(x, y, bx, by, cx, cy);
       const float a3 = triangle_area(x, y, cx, cy, ax, ay);
-      if (std::fabs(total - (a1 + a2 + a3)) < kInsideTolerance) texels.push_back(texel_yuv(x, y, tex));
+      if (std::fabs(total - (a1 + a2 + a3)) < kInsideTolerance)
+        texels.push_back(texel_yuv(x, y, tex));
     }
   }
   const auto n = static_cast<double>(texels.size());
@@ -335,8 +336,8 @@ std::vector<double> cotangent_row(const Patch& p) {
     for (std::size_t f = 0; f < nf; ++f) {
       if (p.f[f][kinds[k][0]] != p.centre) continue;
       const auto& c = cot[f];
-      const double value[9] = {c[0], c[0], c[1], c[1], c[2], c[2], -c[0] - c[2], -c[0] - c[1],
-                               -c[2] - c[1]};
+      const double value[9] = {c[0], c[0],         c[1],         c[1],        c[2],
+                               c[2], -c[0] - c[2], -c[0] - c[1], -c[2] - c[1]};
       row[p.f[f][kinds[k][1]]] += value[k];
     }
   }
@@ -412,7 +413,9 @@ KeypointValues keypoint_values(const PatchSource& ref_src, const PatchSource& di
   const std::vector<double> ref_w = area_weights(ref), dis_w = area_weights(dis);
   out.patch_size = crop(ref, dis, *ref_src.texture, *dis_src.texture, threshold);
   // Flag: the centres' shift within one patch size -> 1, two -> 2, else 3.
-  out.flag = out.center_shift <= out.patch_size ? 1 : out.center_shift <= 2 * out.patch_size ? 2 : 3;
+  out.flag = out.center_shift <= out.patch_size       ? 1
+             : out.center_shift <= 2 * out.patch_size ? 2
+                                                      : 3;
   out.ref_smooth = colour_smoothness(ref);
   out.dis_smooth = colour_smoothness(dis);
   out.ref_stats = texel_stats(ref, *ref_src.texture, out.ref_npix);

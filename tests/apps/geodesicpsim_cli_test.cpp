@@ -2,12 +2,11 @@
 // JSON, the keypoint map, and bad input refused with one line naming the file.
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_runner.h"
@@ -45,12 +44,11 @@ TEST_F(GeodesicPsimCli, EveryReferenceRowFromTheToolsJson) {
     const nlohmann::json j = nlohmann::json::parse(run.out);
     EXPECT_EQ(j["metric"], "geodesicpsim");
     EXPECT_EQ(j["reproduces"], "Qi-Yangsjtu/GeodesicPSIM @ 3e06453");
-    const std::pair<std::string, double> values[] = {
-        {"score", j["score"].get<double>()},
-        {"pcs", j["features"]["pcs"].get<double>()},
-        {"dmc", j["features"]["dmc"].get<double>()},
-        {"pca", j["features"]["pca"].get<double>()},
-        {"pcv", j["features"]["pcv"].get<double>()}};
+    const std::pair<std::string, double> values[] = {{"score", j["score"].get<double>()},
+                                                     {"pcs", j["features"]["pcs"].get<double>()},
+                                                     {"dmc", j["features"]["dmc"].get<double>()},
+                                                     {"pca", j["features"]["pca"].get<double>()},
+                                                     {"pcv", j["features"]["pcv"].get<double>()}};
     for (const auto& [col, ours] : values) {
       const double want = std::stod(row.at(col));
       EXPECT_LE(std::fabs(ours - want), 1e-9 * std::fabs(want))

@@ -19,9 +19,7 @@ using test::CsvRow;
 
 constexpr double kRelTolerance = 1e-9;  // the acceptance bound
 
-double rel_diff(double a, double b) {
-  return std::fabs(a - b) / std::max(std::fabs(b), 1e-300);
-}
+double rel_diff(double a, double b) { return std::fabs(a - b) / std::max(std::fabs(b), 1e-300); }
 
 // The first keypoints whose dumped values differ from ours (diagnostics).
 std::string keypoint_differences(const std::string& name, const GeodesicPsimResult& r) {
@@ -40,13 +38,22 @@ std::string keypoint_differences(const std::string& name, const GeodesicPsimResu
       continue;
     }
     if (row.at("pcs_k").empty()) continue;
-    const std::pair<const char*, double> cols[] = {
-        {"ref_npix", kp.ref_texels}, {"dis_npix", kp.dis_texels},
-        {"ref_smooth_Y", kp.ref_smoothness[0]}, {"dis_smooth_Y", kp.dis_smoothness[0]},
-        {"ref_cur", kp.ref_curvature}, {"dis_cur", kp.dis_curvature},
-        {"pcs_k", kp.pcs}, {"dmc_k", kp.dmc}, {"lm_k", kp.lm}, {"var_k", kp.lvar},
-        {"c1m_k", kp.c1m}, {"c1var_k", kp.c1var}, {"c2m_k", kp.c2m}, {"c2var_k", kp.c2var},
-        {"ref_patch_size", kp.patch_size}, {"center_shift", kp.center_shift}};
+    const std::pair<const char*, double> cols[] = {{"ref_npix", kp.ref_texels},
+                                                   {"dis_npix", kp.dis_texels},
+                                                   {"ref_smooth_Y", kp.ref_smoothness[0]},
+                                                   {"dis_smooth_Y", kp.dis_smoothness[0]},
+                                                   {"ref_cur", kp.ref_curvature},
+                                                   {"dis_cur", kp.dis_curvature},
+                                                   {"pcs_k", kp.pcs},
+                                                   {"dmc_k", kp.dmc},
+                                                   {"lm_k", kp.lm},
+                                                   {"var_k", kp.lvar},
+                                                   {"c1m_k", kp.c1m},
+                                                   {"c1var_k", kp.c1var},
+                                                   {"c2m_k", kp.c2m},
+                                                   {"c2var_k", kp.c2var},
+                                                   {"ref_patch_size", kp.patch_size},
+                                                   {"center_shift", kp.center_shift}};
     for (const auto& [col, ours] : cols) {
       const double theirs = std::stod(row.at(col));
       if (rel_diff(ours, theirs) > kRelTolerance && std::fabs(ours - theirs) > 1e-12) {
@@ -80,11 +87,14 @@ TEST_P(GeodesicPsimReference, MatchesTheReferenceTable) {
       {"score", r.score}, {"pcs", r.pcs}, {"dmc", r.dmc}, {"pca", r.pca}, {"pcv", r.pcv}};
   for (const auto& [col, ours] : values) {
     EXPECT_LE(rel_diff(ours, std::stod(row.at(col))), kRelTolerance)
-        << col << " " << ours << " vs " << row.at(col) << "\n" << why;
+        << col << " " << ours << " vs " << row.at(col) << "\n"
+        << why;
   }
 }
 
-std::string case_name(const ::testing::TestParamInfo<CsvRow>& info) { return info.param.at("case"); }
+std::string case_name(const ::testing::TestParamInfo<CsvRow>& info) {
+  return info.param.at("case");
+}
 
 INSTANTIATE_TEST_SUITE_P(Table, GeodesicPsimReference,
                          ::testing::ValuesIn(test::geodesicpsim_reference_rows()), case_name);
@@ -141,8 +151,8 @@ TEST(GeodesicPsim, UntexturedMissingTextureAndNoFacesNameTheFile) {
   expect_error_naming(scratch("untextured.obj", tri + "f 1 2 3\nf 1 3 4\n"), good);
   scratch("missing.mtl", "newmtl m\nmap_Kd nowhere.png\n");
   expect_error_naming(
-      scratch("missing_tex.obj", "mtllib missing.mtl\n" + tri +
-                                     "vt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n"),
+      scratch("missing_tex.obj",
+              "mtllib missing.mtl\n" + tri + "vt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n"),
       good, "nowhere.png");
   expect_error_naming(scratch("nofaces.obj", tri + "vt 0 0\n"), good);
 }
