@@ -76,6 +76,14 @@ TEST_F(GeodesicPsimCli, MapsTheKeypointsOfThePooledPatches) {
   EXPECT_EQ(ply.find("element face"), std::string::npos);
 }
 
+TEST_F(GeodesicPsimCli, TheReportColoursTheKeypoints) {
+  const auto run = qm3d("geodesicpsim tblob4_ref.obj tblob4_dec50.obj --keypoints 100 --report '" +
+                        (dir_ / "r.html").string() + "' -q");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const std::string html = test::slurp(dir_ / "r.html");
+  EXPECT_NE(html.find("geodesicpsim points on the reference"), std::string::npos);
+}
+
 TEST_F(GeodesicPsimCli, BadInputGetsOneLineNamingTheFile) {
   std::ofstream(dir_ / "plain.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   const auto run = qm3d("geodesicpsim tblob4_ref.obj '" + (dir_ / "plain.obj").string() + "'");
