@@ -175,7 +175,9 @@ void pool(const FlagSums& f1, const FlagSums& f2, const FlagSums& f3, GeodesicPs
   r.score = (r.pcs + r.dmc + r.pcv + r.pca) / 4;
 }
 
-void pool_keypoints(const std::vector<KeypointValues>& values, GeodesicPsimResult& r) {
+// `pair` names both files in messages.
+void pool_keypoints(const std::vector<KeypointValues>& values, const std::string& pair,
+                    GeodesicPsimResult& r) {
   const bool any12 = std::any_of(values.begin(), values.end(), [](const KeypointValues& v) {
     return v.flag == 1 || v.flag == 2;
   });
@@ -206,8 +208,7 @@ void pool_keypoints(const std::vector<KeypointValues>& values, GeodesicPsimResul
   }
   r.effective_patches = any12 ? r.flag1 + r.flag2 : r.flag3;
   if (r.effective_patches == 0) {
-    throw NumericError(
-        "geodesicpsim: no keypoint has a patch of more than 3 vertices in both meshes");
+    throw NumericError(pair + ": no keypoint has a patch of more than 3 vertices in both meshes");
   }
   pool(sums[1], sums[2], sums[3], r);
 }
@@ -350,7 +351,7 @@ GeodesicPsimResult compute_geodesicpsim(const std::filesystem::path& reference_o
   const auto values = all_keypoint_values(ref, dis, keypoints, threshold, threads);
   r.keypoints.resize(keypoints.size());
   for (std::size_t k = 0; k < keypoints.size(); ++k) r.keypoints[k].position = keypoints[k];
-  pool_keypoints(values, r);
+  pool_keypoints(values, reference_obj.string() + " vs " + distorted_obj.string(), r);
   progress.finish();
   return r;
 }

@@ -43,8 +43,8 @@ double stof_widened(const char* w, const char* end, const std::string& name, std
   char* stop = nullptr;
   errno = 0;
   const float x = std::strtof(word.c_str(), &stop);
-  if (stop == word.c_str() || errno == ERANGE) {
-    fail(name, "line " + std::to_string(line) + ": '" + word + "' is not a float32 number");
+  if (stop == word.c_str() || errno == ERANGE || !std::isfinite(x)) {
+    fail(name, "line " + std::to_string(line) + ": '" + word + "' is not a finite float32 number");
   }
   return static_cast<double>(x);
 }

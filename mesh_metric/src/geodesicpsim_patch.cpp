@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "geodesicpsim_internal.h"
+#include "qm3d/common/error.h"
 
 namespace qm3d::mesh::gpsim {
 namespace {
@@ -69,7 +70,9 @@ Patch make_patch(const PatchSource& s, const P3& keypoint) {
 
 // The reference's UV -> texel coordinate: (int)(t + 0.5) (truncation), 0 -> 1, clamped to max.
 int texel_coordinate(double t, int max) {
-  int value = static_cast<int>(t + 0.5);
+  // Far outside the image (UVs beyond a single wrap) the int cast would overflow: bounded first.
+  constexpr double kFar = 1 << 30;
+  int value = static_cast<int>(std::clamp(t + 0.5, -kFar, kFar));
   if (value == 0) value = 1;
   return value > max ? max : value;
 }
@@ -277,6 +280,14 @@ int face_texels(const std::array<P2, 3>& uv, const GpTexture& tex, std::array<do
   const int y0 = std::min({t[0][1], t[1][1], t[2][1]}), y1 = std::max({t[0][1], t[1][1], t[2][1]});
   const double ax = t[0][0], ay = t[0][1], bx = t[1][0], by = t[1][1], cx = t[2][0], cy = t[2][1];
   const float total = triangle_area(ax, ay, bx, by, cx, cy);
+  // A face's texel box fits in the image when its UVs are in [0, 1]; UVs far outside it (beyond
+  // what a single wrap brings back) would make the box huge.
+  constexpr double kMaxBoxImages = 4;
+  if (double(x1 - x0 + 1) * double(y1 - y0 + 1) > kMaxBoxImages * tex.width * tex.height + 16) {
+    throw NumericError(
+        "geodesicpsim: texture coordinates far outside [0, 1] (a face spans more "
+        "than the texture image)");
+  }
   std::vector<Yuv> texels;
   for (int x = x0; x <= x1; ++x) {
     for (int y = y0; y <= y1; ++y) {
