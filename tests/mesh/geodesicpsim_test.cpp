@@ -21,50 +21,78 @@ constexpr double kRelTolerance = 1e-9;  // the issue's acceptance bound
 
 double rel_diff(double a, double b) { return std::fabs(a - b) / std::max(std::fabs(b), 1e-300); }
 
-// The first keypoints whose dumped values differ from ours (diagnostics).
-std::string keypoint_differences(const std::string& name, const GeodesicPsimResult& r) {
+// Every keypoint of the reference's per-keypoint dump against ours (flag, texel counts,
+// smoothness, curvature, the eight per-patch similarities, patch size and shift); returns the
+// number of keypoints that differ and describes the first few in `why`.
+int keypoint_differences(const std::string& name, const GeodesicPsimResult& r, std::string& why) {
   const fs::path dump = test::geodesicpsim_dir() / "patches" / (name + ".patches.csv.gz");
-  if (!fs::exists(dump)) return "";
+  if (!fs::exists(dump)) return 0;
   std::istringstream in(test::gunzip_text(dump));
   std::ostringstream out;
-  int shown = 0;
+  out.precision(17);
+  int differ = 0;
   for (const CsvRow& row : test::parse_csv(in)) {
     const auto k = static_cast<std::size_t>(std::stoi(row.at("k")));
-    if (k >= r.keypoints.size() || shown >= 5) break;
+    if (k >= r.keypoints.size()) return ++differ;
     const auto& kp = r.keypoints[k];
+    std::string what;
     if (std::stoi(row.at("flag")) != kp.flag) {
-      out << "k " << k << ": flag " << kp.flag << " vs " << row.at("flag") << "\n";
-      ++shown;
-      continue;
-    }
-    if (row.at("pcs_k").empty()) continue;
-    const std::pair<const char*, double> cols[] = {{"ref_npix", kp.ref_texels},
-                                                   {"dis_npix", kp.dis_texels},
-                                                   {"ref_smooth_Y", kp.ref_smoothness[0]},
-                                                   {"dis_smooth_Y", kp.dis_smoothness[0]},
-                                                   {"ref_cur", kp.ref_curvature},
-                                                   {"dis_cur", kp.dis_curvature},
-                                                   {"pcs_k", kp.pcs},
-                                                   {"dmc_k", kp.dmc},
-                                                   {"lm_k", kp.lm},
-                                                   {"var_k", kp.lvar},
-                                                   {"c1m_k", kp.c1m},
-                                                   {"c1var_k", kp.c1var},
-                                                   {"c2m_k", kp.c2m},
-                                                   {"c2var_k", kp.c2var},
-                                                   {"ref_patch_size", kp.patch_size},
-                                                   {"center_shift", kp.center_shift}};
-    for (const auto& [col, ours] : cols) {
-      const double theirs = std::stod(row.at(col));
-      if (rel_diff(ours, theirs) > kRelTolerance && std::fabs(ours - theirs) > 1e-12) {
-        out.precision(17);
-        out << "k " << k << ": " << col << " " << ours << " vs " << theirs << "\n";
-        ++shown;
-        break;
+      what = "flag " + std::to_string(kp.flag) + " vs " + row.at("flag");
+    } else if (!row.at("pcs_k").empty()) {
+      const std::pair<const char*, double> cols[] = {{"ref_npix", kp.ref_texels},
+                                                     {"dis_npix", kp.dis_texels},
+                                                     {"ref_smooth_Y", kp.ref_smoothness[0]},
+                                                     {"ref_smooth_U", kp.ref_smoothness[1]},
+                                                     {"ref_smooth_V", kp.ref_smoothness[2]},
+                                                     {"dis_smooth_Y", kp.dis_smoothness[0]},
+                                                     {"dis_smooth_U", kp.dis_smoothness[1]},
+                                                     {"dis_smooth_V", kp.dis_smoothness[2]},
+                                                     {"ref_cur", kp.ref_curvature},
+                                                     {"dis_cur", kp.dis_curvature},
+                                                     {"pcs_k", kp.pcs},
+                                                     {"dmc_k", kp.dmc},
+                                                     {"lm_k", kp.lm},
+                                                     {"var_k", kp.lvar},
+                                                     {"c1m_k", kp.c1m},
+                                                     {"c1var_k", kp.c1var},
+                                                     {"c2m_k", kp.c2m},
+                                                     {"c2var_k", kp.c2var},
+                                                     {"ref_patch_size", kp.patch_size},
+                                                     {"center_shift", kp.center_shift}};
+      for (const auto& [col, ours] : cols) {
+        const double theirs = std::stod(row.at(col));
+        if (rel_diff(ours, theirs) > kRelTolerance && std::fabs(ours - theirs) > 1e-12) {
+          std::ostringstream d;
+          d.precision(17);
+          d << col << " " << ours << " vs " << theirs;
+          what = d.str();
+          break;
+        }
       }
     }
+    if (what.empty()) continue;
+    if (++differ <= 5) out << "k " << k << ": " << what << "\n";
   }
-  return out.str();
+  why = out.str();
+  return differ;
+}
+
+// The farthest-point keypoints against the reference's (17 digits: the same doubles).
+int keypoint_position_differences(const std::string& name, const GeodesicPsimResult& r) {
+  const fs::path dump = test::geodesicpsim_dir() / "patches" / (name + ".keypoints.csv.gz");
+  if (!fs::exists(dump)) return 0;
+  std::istringstream in(test::gunzip_text(dump));
+  int differ = 0;
+  for (const CsvRow& row : test::parse_csv(in)) {
+    const auto k = static_cast<std::size_t>(std::stoi(row.at("k")));
+    if (k >= r.keypoints.size()) break;
+    const auto& p = r.keypoints[k].position;
+    if (p[0] != std::stod(row.at("x")) || p[1] != std::stod(row.at("y")) ||
+        p[2] != std::stod(row.at("z"))) {
+      ++differ;
+    }
+  }
+  return differ;
 }
 
 class GeodesicPsimReference : public ::testing::TestWithParam<CsvRow> {};
@@ -76,7 +104,9 @@ TEST_P(GeodesicPsimReference, MatchesTheReferenceTable) {
   if (row.at("N_arg") != "default") o.keypoints = std::stoi(row.at("N_arg"));
   const GeodesicPsimResult r =
       compute_geodesicpsim(dir / row.at("ref_obj"), dir / row.at("dis_obj"), o);
-  const std::string why = keypoint_differences(row.at("case"), r);
+  std::string why;
+  EXPECT_EQ(keypoint_differences(row.at("case"), r, why), 0) << why;
+  EXPECT_EQ(keypoint_position_differences(row.at("case"), r), 0);
   EXPECT_EQ(r.keypoints_used, std::stoi(row.at("N_used")));
   EXPECT_EQ(r.subdivided, row.at("subdivided"));
   EXPECT_EQ(r.flag1, std::stoi(row.at("flag1"))) << why;
@@ -122,6 +152,19 @@ TEST(GeodesicPsim, OneAndTwoThreadsGiveTheSameBits) {
   for (std::size_t k = 0; k < a.keypoints.size(); ++k) {
     EXPECT_EQ(std::isnan(a.keypoints[k].local_score()), std::isnan(b.keypoints[k].local_score()));
   }
+}
+
+// The reference computes its keypoints in 11 blocks of floor(N / 10): with N = 19 that is 11
+// keypoints, the other 8 are never computed (skipped, flag 0).
+TEST(GeodesicPsim, KeypointsPastTheReferencesBlocksAreSkipped) {
+  const fs::path dir = test::geodesicpsim_inputs();
+  GeodesicPsimOptions o;
+  o.keypoints = 19;
+  const auto r = compute_geodesicpsim(dir / "tblob4_ref.obj", dir / "tblob4_texjpeg10.obj", o);
+  EXPECT_EQ(r.keypoints_used, 19);
+  EXPECT_EQ(r.skipped, 8);
+  EXPECT_EQ(r.flag1, 11);
+  for (int k = 11; k < 19; ++k) EXPECT_EQ(r.keypoints[k].flag, 0);
 }
 
 // ---- Bad input: one line naming the file ---------------------------------------------------
