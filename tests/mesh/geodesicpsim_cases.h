@@ -2,6 +2,8 @@
 // their inputs, gunzipped into a scratch folder of the build tree (never into the data).
 #pragma once
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -72,7 +74,8 @@ inline std::filesystem::path geodesicpsim_inputs() {
     if (src.extension() == ".gz") {
       const fs::path dst = dir / src.stem();
       if (!fs::exists(dst) || fs::file_size(dst) == 0) {
-        const std::string tmp = (dir / (name + ".tmp")).string();
+        // Test executables may run at once: each writes its own file, then renames it.
+        const std::string tmp = (dir / (name + "." + std::to_string(getpid()) + ".tmp")).string();
         std::ofstream(tmp, std::ios::binary) << gunzip_text(src);
         fs::rename(tmp, dst);
       }
