@@ -259,7 +259,9 @@ MetricResult run_geodesicpsim(const MetricSpec&, const Input& ref, const Input& 
   GeodesicPsimOptions o;
   static_cast<RunOptions&>(o) = run;
   o.keypoints = v.at("keypoints").get<int>();
-  const GeodesicPsimResult g = compute_geodesicpsim(ref.path(), dist.path(), o);
+  const std::filesystem::path ref_path = ref.path(), dist_path = dist.path();
+  if (run.inputs_done) run.inputs_done();  // nothing of the inputs is used: their files are read
+  const GeodesicPsimResult g = compute_geodesicpsim(ref_path, dist_path, o);
   MetricResult r;
   r.metric = "geodesicpsim";
   r.values = {{"pcs", g.pcs}, {"dmc", g.dmc}, {"pca", g.pca}, {"pcv", g.pcv}};
