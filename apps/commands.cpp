@@ -78,11 +78,17 @@ MetricResult score(const MetricSpec& spec, const Input& reference, const Input& 
 
 void write_map(const std::filesystem::path& map, const MetricSpec& spec, const MetricResult& result,
                const Input& reference, const Input& distorted) {
-  if (!spec.per_element_on_input) {
-    throw InputError(map.string() + ": " + spec.name +
-                     " has no per-element values on its inputs to map");
-  }
   const bool prefer_dist = spec.default_direction != Direction::kRefToDist;
+  if (!spec.per_element_on_input) {
+    const DirectionResult& d = result.any_direction(prefer_dist);
+    if (!spec.per_element_positions || d.element_positions.empty()) {
+      throw InputError(map.string() + ": " + spec.name +
+                       " has no per-element values on its inputs to map");
+    }
+    // Values at their own positions (GeodesicPSIM's keypoints): a point cloud.
+    write_distortion_map(map, d.element_positions, {}, d.per_element, d.per_element_values);
+    return;
+  }
   const DirectionResult& d = result.any_direction(prefer_dist);
   const bool on_distorted = result.dist_to_ref && &d == &*result.dist_to_ref;
   const Input& iterated = on_distorted ? distorted : reference;

@@ -246,11 +246,23 @@ class Shapes {
   }
   int index(bool reference, Input::Kind kind) {
     for (std::size_t i = 0; i < shapes_.size(); ++i) {
+      if (std::find(own_.begin(), own_.end(), i) != own_.end()) continue;
       if (keys_[i] == std::make_pair(reference, kind)) return static_cast<int>(i);
     }
     shapes_.push_back(
         make_shape(reference ? ref_ : dist_, kind, reference ? "reference" : "distorted", budget_));
     keys_.emplace_back(reference, kind);
+    return static_cast<int>(shapes_.size()) - 1;
+  }
+  // Points of their own (a metric's per-element positions: GeodesicPSIM's keypoints).
+  int points(const std::vector<Vec3>& positions, const std::string& object) {
+    Shape s;
+    s.object = object;
+    s.positions = &positions;
+    if (positions.size() > budget_) s.kept = display_subset(positions.size(), budget_);
+    shapes_.push_back(std::move(s));
+    keys_.emplace_back(false, Input::Kind::kMesh);  // never looked up: points() adds each time
+    own_.push_back(shapes_.size() - 1);
     return static_cast<int>(shapes_.size()) - 1;
   }
   const Shape& operator[](int i) const { return shapes_[static_cast<std::size_t>(i)]; }
@@ -263,14 +275,32 @@ class Shapes {
   std::size_t budget_;
   std::vector<Shape> shapes_;
   std::vector<std::pair<bool, Input::Kind>> keys_;
+  std::vector<std::size_t> own_;  // shapes made by points()
 };
+
+// The layers of a metric whose per-element values sit at positions of their own (GeodesicPSIM's
+// keypoints on the reference), drawn as points.
+void element_position_layers(const ReportEntry& e, Shapes& shapes, Blobs& blobs, json& layers) {
+  const std::pair<Direction, const std::optional<DirectionResult>*> dirs[2] = {
+      {Direction::kRefToDist, &e.result->ref_to_dist},
+      {Direction::kDistToRef, &e.result->dist_to_ref}};
+  for (const auto& [dir, d] : dirs) {
+    if (!d->has_value() || (*d)->per_element.empty() || (*d)->element_positions.empty()) continue;
+    const std::string on = dir == Direction::kRefToDist ? "reference" : "distorted";
+    const int g = shapes.points((*d)->element_positions, e.spec->name + " points on the " + on);
+    layers.push_back(layer_json(e, dir, **d, g, shapes[g], blobs));
+  }
+}
 
 // Every direction of every metric with per-element values on its inputs, each metric's
 // preferred direction first (the one --map writes).
 json layers_json(const std::vector<ReportEntry>& entries, Shapes& shapes, Blobs& blobs) {
   json layers = json::array();
   for (const ReportEntry& e : entries) {
-    if (!e.spec->per_element_on_input) continue;
+    if (!e.spec->per_element_on_input) {
+      if (e.spec->per_element_positions) element_position_layers(e, shapes, blobs, layers);
+      continue;
+    }
     const bool prefer_dist = e.spec->default_direction != Direction::kRefToDist;
     const std::pair<Direction, const std::optional<DirectionResult>*> dirs[2] = {
         {Direction::kDistToRef, &e.result->dist_to_ref},

@@ -248,7 +248,8 @@ int run(int argc, char** argv) {
     add_read_options(c.cmd, cli.colour_scale);
     add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
                        cli.options);
-    if (!c.report) add_output_options(c.cmd, cli.out, c.spec && c.spec->per_element_on_input);
+    if (!c.report) add_output_options(c.cmd, cli.out, c.spec && (c.spec->per_element_on_input ||
+                                                                   c.spec->per_element_positions));
     add_report_options(c.cmd, cli.report, c.report);
   }
 

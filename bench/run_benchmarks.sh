@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|geodesicpsim|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -44,6 +44,13 @@
 #            the reference (mmspg/pointssim in Octave) takes ~36 s (target >= 100 x: <= 0.36 s),
 #            and the default estimator on 100k and 1M points (linear in N; target: 1M in seconds);
 #            the score must be the same in every run (reported, not enforced: the times)
+#   geodesicpsim `geodesicpsim --threads 1` and `--threads 2` (keypoints 5000) on the basketball
+#            frame against its qp8 / qp16 copies and on the non-square-texture blob pair of
+#            ../shared/data/reference/geodesicpsim (inputs gunzipped into $QM3D_BENCH_DIR), beside
+#            the reference's recorded numbers (geodesicpsim_reference.csv: its CPU time and peak
+#            RSS with one thread); the score must equal the table's within 1e-9 relative. Targets:
+#            the reference's CPU / qm3d's >= 5, qm3d's peak RSS <= 1/4 of the reference's
+#            (reported, not enforced).
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
 #            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
@@ -514,6 +521,53 @@ if [ "$WHICH" = all ] || [ "$WHICH" = pointssim ]; then
       "$(stats "$TMP/case" 2 1024)" "$(head -1 "$TMP/scores")" "$target"
   done
 fi
+
+if [ "$WHICH" = all ] || [ "$WHICH" = geodesicpsim ]; then
+  GP="$ROOT/../shared/data/reference/geodesicpsim"
+  GPD="$DATA/geodesicpsim"
+  mkdir -p "$GPD"
+  for f in "$GP"/inputs/*; do
+    b=$(basename "$f")
+    case "$b" in
+      *.gz) [ -s "$GPD/${b%.gz}" ] || gunzip -c "$f" > "$GPD/${b%.gz}" ;;
+      *) [ -e "$GPD/$b" ] || ln -s "$f" "$GPD/$b" ;;
+    esac
+  done
+  echo
+  echo "| case | tool | threads | wall | CPU | peak RSS | score | target |"
+  echo "|---|---|---|---|---|---|---|---|"
+  summary=()
+  for c in bb1_qp16_default bb1_qp8_default tb5ns_texjpeg30_default; do
+    # ref dis want_score ref_cpu ref_rss_mb (the reference's 1-thread run)
+    read -r ref dis want rcpu rrss < <($PY - "$GP/geodesicpsim_reference.csv" "$c" <<'EOF2'
+import csv, sys
+r = next(r for r in csv.DictReader(open(sys.argv[1])) if r["case"] == sys.argv[2])
+print(r["ref_obj"], r["dis_obj"], r["score"], r["cpu_s_1thread"], r["maxrss_MB_1thread"])
+EOF2
+)
+    for t in 1 2; do
+      : > "$TMP/tq"; : > "$TMP/sq"
+      for _ in $(seq "$RUNS"); do
+        measure_once "$TMP/tq" "$QM3D" geodesicpsim "$GPD/$ref" "$GPD/$dis" --threads "$t" --quiet --json
+        $PY -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['score']))" "$TMP/out" >> "$TMP/sq" 2>/dev/null || echo error >> "$TMP/sq"
+      done
+      s=$(head -1 "$TMP/sq")
+      printf '| %s | qm3d | %s | %s s | %s s | %s MB | %s | CPU <= %s s, RSS <= %s MB |\n' "$c" "$t" \
+        "$(stats "$TMP/tq" 0)" "$(stats "$TMP/tq" 1)" "$(stats "$TMP/tq" 2 1024)" "$s" \
+        "$($PY -c "print('%.1f' % ($rcpu / 5))")" "$($PY -c "print('%.0f' % ($rrss / 4))")"
+      if [ "$(sort -u "$TMP/sq" | wc -l)" != 1 ] || ! $PY -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(0 if abs(a - b) <= 1e-9 * abs(b) else 1)" "$s" "$want"; then
+        summary+=("FAIL: $c --threads $t: qm3d's score $(sort -u "$TMP/sq" | tr '\n' ' ')vs the table's $want"); STATUS=1
+      fi
+      [ "$t" = 1 ] || continue
+      cq=$(median "$TMP/tq" 1) mq=$(median "$TMP/tq" 2)
+      summary+=("$c: reference CPU / qm3d CPU (1 thread) = $rcpu / $cq s = $($PY -c "print('%.1f' % ($rcpu / max($cq, 0.01)))") (target >= 5), qm3d peak RSS $((${mq%.*} / 1024)) MB vs the reference's $rrss MB (target <= 1/4)")
+    done
+    printf '| %s | GeodesicPSIM @ 3e06453 (recorded) | 1 | | %s s | %s MB | %s | |\n' "$c" "$rcpu" "$rrss" "$want"
+  done
+  echo
+  for line in "${summary[@]}"; do echo "$line"; done
+fi
+
 if [ "$WHICH" = vs-reference ]; then
   MEPP2="${QM3D_MEPP2_CMDM:-}" PCQM_REF="${QM3D_PCQM_REF:-}"
   [ -n "$MEPP2$PCQM_REF" ] || {

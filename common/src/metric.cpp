@@ -681,18 +681,24 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
   // Both inputs are read concurrently unless one thread was asked for.
   const Input::Kind ref_reads = spec.reads_input(reference, reference, distorted);
   const Input::Kind dist_reads = spec.reads_input(distorted, reference, distorted);
-  auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
-                             [&] { reference.load(ref_reads); });
-  distorted.load(dist_reads);
-  ref_task.get();
+  // A metric that reads its files itself gets them unread (it checks them).
+  if (!spec.reads_files) {
+    auto ref_task = std::async(run.threads == 1 ? std::launch::deferred : std::launch::async,
+                               [&] { reference.load(ref_reads); });
+    distorted.load(dist_reads);
+    ref_task.get();
+  }
   // Taken now: the metric may release the inputs (RunOptions::inputs_done).
   const std::vector<std::string> reading =
-      cloud_reader_warnings(reference, ref_reads == Input::Kind::kCloud, distorted,
-                            dist_reads == Input::Kind::kCloud);
+      spec.reads_files ? std::vector<std::string>{}
+                       : cloud_reader_warnings(reference, ref_reads == Input::Kind::kCloud,
+                                               distorted, dist_reads == Input::Kind::kCloud);
   MetricResult result;
   try {
-    check_coordinate_range(positions_of(reference, ref_reads), reference.name());
-    check_coordinate_range(positions_of(distorted, dist_reads), distorted.name());
+    if (!spec.reads_files) {
+      check_coordinate_range(positions_of(reference, ref_reads), reference.name());
+      check_coordinate_range(positions_of(distorted, dist_reads), distorted.name());
+    }
     result = spec.run(spec, reference, distorted, run, values);
     check_finite_result(spec, result);
   } catch (const NumericError& e) {

@@ -2,6 +2,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/mesh/geodesicpsim.h"
 #include "qm3d/mesh/grid_sampling.h"
 #include "qm3d/mesh/mesh_io.h"
 #include "qm3d/mesh/sampling.h"
@@ -88,6 +89,7 @@ void register_metrics(Registry& registry) {
   registry.set_colour_matcher(match_surface_colours);
   registry.add(cmdm_spec());
   registry.add(msdm2_spec());
+  registry.add(geodesicpsim_spec());
 }
 
 }  // namespace qm3d::mesh

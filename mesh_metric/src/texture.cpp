@@ -297,4 +297,28 @@ TexturedMesh parse_textured_obj(const std::string& text, const std::filesystem::
   return out;
 }
 
+std::filesystem::path obj_texture_file(const std::string& text, const std::filesystem::path& path) {
+  const ObjTexturing t = parse_obj_texturing(text, path.string());
+  if (t.mtllibs.empty())
+    fail(path.string(), "no mtllib: the OBJ names no material file (untextured)");
+  const auto materials = read_materials(t, path);
+  std::filesystem::path file;
+  for (std::size_t p = 0; p < t.polygon_materials.size(); ++p) {
+    const std::string& name = t.polygon_materials[p];
+    if (name.empty())
+      fail(path.string(), "face " + std::to_string(p) + " has no material (usemtl)");
+    const auto m = materials.find(name);
+    if (m == materials.end()) fail(path.string(), "material '" + name + "' is in no mtllib");
+    if (m->second.map_kd.empty()) {
+      fail(path.string(), "material '" + name + "' has no texture image (map_Kd)");
+    }
+    if (!file.empty() && file != m->second.map_kd) {
+      fail(path.string(), "its materials name several texture images (one is supported)");
+    }
+    file = m->second.map_kd;
+  }
+  if (file.empty()) fail(path.string(), "no faces");
+  return file;
+}
+
 }  // namespace qm3d::mesh

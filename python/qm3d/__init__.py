@@ -153,6 +153,9 @@ class Direction:
             (psnr: each point's D1 error, its squared distance).
         per_element_values: dict of further per-element arrays (psnr: "d2" and "c0".."c2",
             each point's D2 and squared colour errors), empty unless ``per_element=True``.
+        element_positions: numpy (n, 3) array of where each per-element value is when it is
+            not on the input's elements (geodesicpsim: the keypoints of the pooled patches),
+            else None.
     """
 
     def __init__(self, d, names):
@@ -165,6 +168,7 @@ class Direction:
             self.box_size = d.box_size
         self.per_element = d.per_element
         self.per_element_values = dict(d.per_element_values)
+        self.element_positions = d.element_positions
 
     def __repr__(self):
         return f"Direction(score={self.score!r})"

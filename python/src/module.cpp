@@ -368,6 +368,10 @@ PYBIND11_MODULE(_qm3d, m) {
         py::dict out;
         for (const auto& [name, v] : d.per_element_values) out[py::str(name)] = as_numpy(v);
         return out;
+      })
+      .def_property_readonly("element_positions", [](const DirectionResult& d) -> py::object {
+        if (d.element_positions.empty()) return py::none();
+        return rows_as_numpy(d.element_positions);
       });
 
   py::class_<MetricResult>(m, "MetricResult")

@@ -208,6 +208,13 @@ struct MetricSpec {
   /// The per-element values are on the input's elements (vertices or points), so that they can
   /// be written on its geometry; false when they are on something else (samples).
   bool per_element_on_input = true;
+  /// With per_element_on_input false: each per-element value has a position
+  /// (DirectionResult::element_positions, GeodesicPSIM's keypoints), so that maps write them as
+  /// points.
+  bool per_element_positions = false;
+  /// The metric reads its input files itself (GeodesicPSIM: an OBJ and its texture as its
+  /// reference reads them): run_metric does not load them (no second copy in memory).
+  bool reads_files = false;
 
   const std::string& model_name() const { return model_metric.empty() ? name : model_metric; }
   std::vector<OptionSpec> options;

@@ -23,6 +23,7 @@
 #include "qm3d/common/features.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/progress.h"
+#include "qm3d/common/types.h"
 
 namespace qm3d {
 
@@ -88,6 +89,9 @@ struct DirectionResult {
   /// Further per-element values by name, each like per_element (psnr: "c0".."c2", each point's
   /// squared colour error per channel); maps write them as scalar_NAME.
   std::vector<std::pair<std::string, std::vector<double>>> per_element_values;
+  /// Where each per-element value is, when not on the input's elements
+  /// (MetricSpec::per_element_positions: GeodesicPSIM's keypoints); empty otherwise.
+  std::vector<Vec3> element_positions;
 };
 
 /// Where a result comes from: enough to reproduce it.

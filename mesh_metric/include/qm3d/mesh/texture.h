@@ -73,4 +73,11 @@ TexturedMesh read_textured_obj(const std::filesystem::path& path);
 /// The same for an OBJ already read into `obj_text`; `path` locates its MTL and textures.
 TexturedMesh parse_textured_obj(const std::string& obj_text, const std::filesystem::path& path);
 
+/// The one texture image the faces of an OBJ use (the `map_Kd` of their materials, as
+/// read_textured_obj finds it), for metrics that take a single texture per mesh (GeodesicPSIM).
+/// FormatError naming the file at fault: no mtllib, a face without UV or material, a material
+/// without `map_Kd`, materials naming different images; InputError for a missing MTL.
+std::filesystem::path obj_texture_file(const std::string& obj_text,
+                                       const std::filesystem::path& path);
+
 }  // namespace qm3d::mesh
