@@ -91,7 +91,7 @@ def test_registry_says_psnr_is_a_quality_with_named_values():
     assert spec["quality_value_names"] == [n for n in spec["value_names"] if n.endswith("_psnr")]
     assert "d1_mse" not in spec["quality_value_names"]
     assert all(s["higher_is_better"] is (s["name"] in ("psnr", "ibsm", "graphsim", "msgraphsim",
-                                                     "pointssim"))
+                                                     "pointssim", "geodesicpsim"))
                for s in qm3d.metrics())
     assert {o["name"] for o in spec["options"]} >= {
         "peak", "color_space", "drop_duplicates", "neighbours", "average_normals", "normals",

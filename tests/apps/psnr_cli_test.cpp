@@ -83,7 +83,7 @@ TEST_F(PsnrCli, HelpSaysWhichScoresAreQualities) {
             std::string::npos)
       << help.out;
   EXPECT_NE(help.out.find("qualities (higher is better; in dB inf = identical, similarities 1 = "
-                          "identical): PSNR, GraphSIM, MS-GraphSIM, "
+                          "identical): GeodesicPSIM, PSNR, GraphSIM, MS-GraphSIM, "
                           "PointSSIM, IBSM."),
             std::string::npos)
       << help.out;
