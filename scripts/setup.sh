@@ -26,7 +26,7 @@ PACKAGES=(
   locales
   slurm-wlm munge
   chromium libjs-three
-  dpkg-dev file
+  dpkg-dev file man-db
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }

@@ -13,6 +13,9 @@
 #   - the unpacked tool runs `qm3d demo` and scores a bundled pair with the package's tables
 #     (SCRATCH/usr/share/qm3d/lab2000hl, found beside SCRATCH/usr/bin/qm3d, with no QM3D_DATA_DIR),
 #     and Debian's python3 imports the package's module and scores the same pair with them;
+#   - the manual page qm3d(1) is in the package (usr/share/man/man1/qm3d.1.gz, gzip -9n) and, once
+#     installed, `man -l` and `man qm3d` (MANPATH=SCRATCH/usr/share/man) render it with every
+#     command and every metric of the packaged tool (skipped when man-db is not installed);
 #   - `dpkg --root=SCRATCH -r qm3d` removes every file it installed.
 #
 #   tests/package/test_deb.sh [BUILD_DIR]      (default: build/, already built: cpack only
@@ -83,7 +86,7 @@ diff -u "$SCRATCH/installed.txt" "$SCRATCH/packaged.txt" >&2 ||
   fail "the package's files differ from cmake --install's (- installed only, + packaged only)"
 for f in usr/bin/qm3d usr/lib/cmake/qm3d/qm3dConfig.cmake usr/include/qm3d/common/version.h \
          usr/lib/libqm3d_common.a usr/share/qm3d/data/meshes/blob3_ref.off \
-         usr/lib/python3/dist-packages/qm3d/__init__.py; do
+         usr/lib/python3/dist-packages/qm3d/__init__.py usr/share/man/man1/qm3d.1.gz; do
   grep -qx "$f" "$SCRATCH/packaged.txt" || fail "$f is not in the package"
 done
 TABLES_DIR="$(sed -n 's/^QM3D_DEFAULT_DATA_DIR:PATH=//p' "$BUILD_DIR/CMakeCache.txt")"
@@ -138,6 +141,39 @@ for elf in "${ELVES[@]}"; do
   done
   log "ok   $name: every library found, each one's package in Depends"
 done
+
+# ---- the manual page: gzip -9n (no name, no time stamp), rendered by man with every command ----
+MANPAGE="$ROOTFS/usr/share/man/man1/qm3d.1.gz"
+file -b "$MANPAGE" | grep -q '^gzip compressed data, max compression' ||
+  fail "qm3d.1.gz is not gzip -9n: $(file -b "$MANPAGE")"
+if command -v man >/dev/null; then
+  MANWIDTH=200 man -l "$MANPAGE" >"$SCRATCH/man-l.txt" 2>"$SCRATCH/man.err" ||
+    { cat "$SCRATCH/man.err" >&2; fail "man -l could not render qm3d.1.gz"; }
+  MANPATH="$ROOTFS/usr/share/man" MANWIDTH=200 man qm3d >"$SCRATCH/man.txt" 2>"$SCRATCH/man.err" ||
+    { cat "$SCRATCH/man.err" >&2; fail "man qm3d (MANPATH=$ROOTFS/usr/share/man) found no page"; }
+  cmp -s "$SCRATCH/man.txt" "$SCRATCH/man-l.txt" || fail "man qm3d and man -l render different pages"
+  grep -q '^NAME' "$SCRATCH/man.txt" && grep -q '^COMMANDS' "$SCRATCH/man.txt" ||
+    fail "man qm3d has no NAME or COMMANDS section"
+  # Every command of the packaged tool's --help and every metric of its --version, with its summary.
+  mapfile -t COMMANDS < <(QM3D_DATA_DIR=/nonexistent "$ROOTFS/usr/bin/qm3d" --help |
+    sed -n '/^Subcommands:/,$ s/^  \([a-z][a-z0-9_-]*\) .*/\1/p')
+  mapfile -t METRICS < <("$ROOTFS/usr/bin/qm3d" --version | sed -n 's/^  \([a-z0-9_]*\): .*/\1/p')
+  [ "${#COMMANDS[@]}" -ge 10 ] && [ "${#METRICS[@]}" -ge 5 ] ||
+    fail "found ${#COMMANDS[@]} commands and ${#METRICS[@]} metrics in qm3d --help / --version"
+  for c in "${COMMANDS[@]}"; do
+    summary="$("$ROOTFS/usr/bin/qm3d" --help | sed -n "s/^  $c  *\([A-Z].\{0,30\}\).*/\1/p" | tr -s ' ')"
+    grep -Eq "^ {7}$c( |$)" "$SCRATCH/man.txt" || fail "man qm3d does not list the command $c"
+    tr -s ' \n' ' ' <"$SCRATCH/man.txt" | grep -Fq "$summary" ||
+      fail "man qm3d does not give $c's summary ($summary)"
+  done
+  for m in "${METRICS[@]}"; do
+    sed -n '/^METRICS/,/^COMMAND OPTIONS/p' "$SCRATCH/man.txt" | grep -Eq "^ {7}$m( |$)" ||
+      fail "the METRICS section of man qm3d does not list $m"
+  done
+  log "ok   man qm3d: ${#COMMANDS[@]} commands and ${#METRICS[@]} metrics, each with its summary"
+else
+  log "man (man-db) not installed: the page's rendering is not checked"
+fi
 
 # ---- the packaged tool and Python module, with the package's tables ----
 if [ "$HAVE_TABLES" -eq 1 ]; then
