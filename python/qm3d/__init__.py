@@ -109,10 +109,14 @@ def _colour_scale(value):
 class _Inputs:
     """The inputs of one call, built once per way a metric reads them (mesh or cloud)."""
 
-    def __init__(self, obj, argument, colour_scale="auto"):
+    def __init__(self, obj, argument, colour_scale="auto", texture=None):
         self._obj, self._argument, self._made = obj, argument, {}
         if isinstance(obj, (str, bytes, _os.PathLike)):
-            self._file = _qm3d.Input.from_file(_os.fsdecode(obj), _colour_scale(colour_scale))
+            keyword = {"reference": "ref_texture=", "distorted": "dist_texture="}.get(
+                argument, "texture=")
+            self._file = _qm3d.Input.from_file(
+                _os.fsdecode(obj), _colour_scale(colour_scale),
+                "" if texture is None else _os.fsdecode(texture), keyword)
             self.kind = self._file.kind
         else:
             p, c, f, name = _arrays_of(obj, argument)
@@ -249,7 +253,7 @@ def _installed_tables():
 _DEFAULT_TABLES = None if _os.environ.get("QM3D_DATA_DIR") else _installed_tables()
 
 _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
-                 "progress", "colour_scale")
+                 "progress", "colour_scale", "ref_texture", "dist_texture")
 
 
 def metrics():
@@ -304,7 +308,8 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     known = {o["name"]: o for o in spec["options"]}
     options = {}
     run = dict(direction=None, threads=0, per_element=False, data_dir=None, weights=None,
-               model=None, progress=None, colour_scale="auto")
+               model=None, progress=None, colour_scale="auto", ref_texture=None,
+               dist_texture=None)
     for key, value in kwargs.items():
         if key in run:
             run[key] = value
@@ -333,8 +338,10 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
                else [_finite(f"{name}: weights", w) for w in run["weights"]])
     # Inputs made for this call alone are freed as soon as the metric holds its own copies.
     release = release or (ref_inputs is None and dist_inputs is None)
-    ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"])
-    dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"])
+    ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"],
+                                       run["ref_texture"])
+    dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"],
+                                         run["dist_texture"])
     reads = spec["reads"]
     if spec["reads_two_meshes_as_meshes"] and ref_inputs.kind == dist_inputs.kind == "mesh":
         reads = "mesh"  # the metric dispatches on the pair (dlab: meshes by projection)
@@ -372,6 +379,10 @@ _COMMON_DOC = """
             as numbers in files (OBJ, OFF, PLY float). auto = the reference's rule (0..255 when
             any value is above 1; warns when few values decide), unit = 0..1 (values above 1
             clamped), byte = 0..255.
+        ref_texture, dist_texture: a texture map (PNG, JPEG, BMP, TGA) replacing the
+            reference's / distorted mesh's own, as --ref-texture / --dist-texture (mmetric's
+            --inputMapA / --inputMapB): every face with texture coordinates takes its colour
+            from it.
 {model}        progress: optional callable(stage: str, fraction: float), told each stage.
 {options}
     Returns:
@@ -398,7 +409,9 @@ def _make_metric_function(spec):
                _inspect.Parameter("threads", kw, default=0),
                _inspect.Parameter("per_element", kw, default=False),
                _inspect.Parameter("data_dir", kw, default=None),
-               _inspect.Parameter("colour_scale", kw, default="auto")]
+               _inspect.Parameter("colour_scale", kw, default="auto"),
+               _inspect.Parameter("ref_texture", kw, default=None),
+               _inspect.Parameter("dist_texture", kw, default=None)]
     if spec["takes_model"]:
         params += [_inspect.Parameter("weights", kw, default=None),
                    _inspect.Parameter("model", kw, default=None)]
@@ -437,8 +450,8 @@ def compare(reference, distorted, **options):
                         "names its metric) or call the metric")
     _check_option_names("compare", options)
     scale = options.get("colour_scale", "auto")
-    ref_inputs = _Inputs(reference, "reference", scale)
-    dist_inputs = _Inputs(distorted, "distorted", scale)
+    ref_inputs = _Inputs(reference, "reference", scale, options.get("ref_texture"))
+    dist_inputs = _Inputs(distorted, "distorted", scale, options.get("dist_texture"))
     out = {}
     names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
     for i, name in enumerate(names):
@@ -499,7 +512,7 @@ def read_cloud(path, colour_scale="auto"):
 
 
 def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=1024, box=None,
-           all_axes=False, bilinear=False):
+           all_axes=False, bilinear=False, texture=None):
     """Samples a mesh's surface into a coloured point cloud, as ``qm3d sample`` does.
 
     Args:
@@ -516,6 +529,8 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
             --minPos / --maxPos); None = the mesh's own vertex box.
         all_axes: grid mode: rays along all three axes (mmetric without --useNormal).
         bilinear: grid mode: bilinear texture lookups (mmetric --bilinear).
+        texture: a texture map replacing the mesh file's own, as --texture (mmetric's
+            --inputMap): every face with texture coordinates takes its colour from it.
 
     Returns:
         dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1 (grid mode: the float32
@@ -525,7 +540,7 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
     if mode == "grid":
         if points is not None or density is not None:
             raise ValueError("sample: points and density apply to mode='random'")
-        inputs = _Inputs(mesh, "mesh")
+        inputs = _Inputs(mesh, "mesh", texture=texture)
         p, n, c, w, degenerate, step = _qm3d.sample_grid(
             inputs.get("mesh"), int(grid_size), None if box is None else [float(v) for v in box],
             bool(all_axes), bool(bilinear))
@@ -535,7 +550,7 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
         raise ValueError(f"sample: mode must be 'random' or 'grid', got {mode!r}")
     if (points is None) == (density is None):
         raise ValueError("sample: give exactly one of points and density")
-    inputs = _Inputs(mesh, "mesh")
+    inputs = _Inputs(mesh, "mesh", texture=texture)
     p, c = _qm3d.sample(inputs.get("mesh"), int(points or 0), float(density or 0), int(seed))
     return {"positions": p, "colors": c}
 
