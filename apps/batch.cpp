@@ -34,8 +34,11 @@ namespace {
 class Progress {
  public:
   Progress(std::size_t total, bool quiet)
-      : total_(total), quiet_(quiet), tty_(stderr_is_terminal()),
-        start_(std::chrono::steady_clock::now()), last_(start_) {}
+      : total_(total),
+        quiet_(quiet),
+        tty_(stderr_is_terminal()),
+        start_(std::chrono::steady_clock::now()),
+        last_(start_) {}
 
   void done_one(bool failed) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -89,7 +92,14 @@ ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std:
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
-    const Input r = registry().read(ref, o.request.read), d = registry().read(dist, o.request.read);
+    ReadOptions ref_read = o.request.read, dist_read = o.request.read;
+    if (const auto t = o.textures.find({pair.reference, pair.distorted}); t != o.textures.end()) {
+      if (!t->second.first.empty()) ref_read.texture = resolve(o.list, t->second.first);
+      if (!t->second.second.empty()) dist_read.texture = resolve(o.list, t->second.second);
+    }
+    ref_read.texture_option = "the list's ref_texture column";
+    dist_read.texture_option = "the list's dist_texture column";
+    const Input r = registry().read(ref, ref_read), d = registry().read(dist, dist_read);
     const auto specs = metrics_for(metric, r, d);
     ScoreRequest request = o.request;
     request.release_inputs = o.report_dir.empty();  // a report reads both inputs
@@ -171,17 +181,16 @@ class PairReports {
       if (f.size() < 6 || f[0] == "reference") continue;
       IndexRow r{f[0], f[1], f[2], std::nullopt, f[5], ""};
       if (f[4] == "ok" && !f[3].empty()) r.score = std::stod(f[3]);
-      if (const MetricSpec* spec = registry().find(r.metric)) r.higher_is_better = spec->higher_is_better;
+      if (const MetricSpec* spec = registry().find(r.metric))
+        r.higher_is_better = spec->higher_is_better;
       const std::string name = report_file_name(r.reference, r.distorted);
       if (std::filesystem::exists(o_.report_dir / name)) r.report = name;
       rows.push_back(std::move(r));
     }
-    const std::string index =
-        o_.shard ? "index-" + std::to_string(o_.shard->index) + "-of-" +
-                       std::to_string(o_.shard->count) + ".html"
-                 : "index.html";
-    write_report_index(o_.report_dir / index, rows,
-                       "qm3d batch: " + o_.list.filename().string());
+    const std::string index = o_.shard ? "index-" + std::to_string(o_.shard->index) + "-of-" +
+                                             std::to_string(o_.shard->count) + ".html"
+                                       : "index.html";
+    write_report_index(o_.report_dir / index, rows, "qm3d batch: " + o_.list.filename().string());
   }
 
   const std::vector<std::string>& errors() const { return errors_; }
@@ -387,8 +396,9 @@ struct ScoringSummary {
 
 // Scores the rows of `todo`, o.jobs jobs at a time, appending each row to `out` as it is done.
 // Throws InputError when a row cannot be written (the jobs stop; the rows written stay).
-ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo,
-                LockedResults& out, const std::string& settings) {
+ScoringSummary score_jobs(const BatchOptions& o,
+                          const std::vector<std::pair<ListPair, std::string>>& todo,
+                          LockedResults& out, const std::string& settings) {
   // A worker process writes its pair's report itself; here only the folder is made.
   PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
   const std::vector<PairJob> jobs = group_jobs(todo, !o.report_dir.empty());
@@ -486,6 +496,22 @@ std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
   return csv_value_names(specs);
 }
 
+// Each pair's texture maps; a pair listed twice with other maps is an error (its rows are keyed
+// by reference, distorted and metric).
+std::map<std::pair<std::string, std::string>, std::pair<std::string, std::string>> list_textures(
+    const std::vector<ListPair>& pairs, const std::filesystem::path& list) {
+  std::map<std::pair<std::string, std::string>, std::pair<std::string, std::string>> out;
+  for (const ListPair& p : pairs) {
+    const std::pair<std::string, std::string> maps{p.ref_texture, p.dist_texture};
+    const auto [at, added] = out.emplace(std::pair{p.reference, p.distorted}, maps);
+    if (!added && at->second != maps) {
+      throw FormatError(list.string() + ": " + p.reference + ", " + p.distorted +
+                        " is listed with different texture maps");
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int run_batch(const BatchOptions& options) {
@@ -493,9 +519,11 @@ int run_batch(const BatchOptions& options) {
       parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string());
   BatchOptions o = options;
   o.value_names = list_value_names(pairs);
-  if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
-    return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
-  });
+  o.textures = list_textures(pairs, o.list);
+  if (o.shard)
+    pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
+      return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
+    });
   refuse_input_as_output(o, pairs);
   if (!o.report_dir.empty()) make_report_dir(o.report_dir);  // before the output is touched
   if (o.retry_failed && !o.resume) throw std::invalid_argument("--retry-failed needs --resume");
@@ -516,8 +544,8 @@ int run_batch(const BatchOptions& options) {
     }
   }
   if (!o.quiet && todo.size() < rows) {
-    std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
-              << todo.size() << " to go\n";
+    std::cerr << "batch: " << rows - todo.size() << " pairs already done, " << todo.size()
+              << " to go\n";
   }
   return finish(o, score_jobs(o, todo, out, settings));
 }
@@ -569,8 +597,10 @@ void run_worker_job(const BatchOptions& o, const std::string& line) {
 
 int run_batch_worker(const BatchOptions& options) {
   BatchOptions o = options;
-  o.value_names = list_value_names(
-      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string()));
+  const std::vector<ListPair> pairs =
+      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string());
+  o.value_names = list_value_names(pairs);
+  o.textures = list_textures(pairs, o.list);
   // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   std::string line;
