@@ -34,11 +34,8 @@ namespace {
 class Progress {
  public:
   Progress(std::size_t total, bool quiet)
-      : total_(total),
-        quiet_(quiet),
-        tty_(stderr_is_terminal()),
-        start_(std::chrono::steady_clock::now()),
-        last_(start_) {}
+      : total_(total), quiet_(quiet), tty_(stderr_is_terminal()),
+        start_(std::chrono::steady_clock::now()), last_(start_) {}
 
   void done_one(bool failed) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -181,16 +178,17 @@ class PairReports {
       if (f.size() < 6 || f[0] == "reference") continue;
       IndexRow r{f[0], f[1], f[2], std::nullopt, f[5], ""};
       if (f[4] == "ok" && !f[3].empty()) r.score = std::stod(f[3]);
-      if (const MetricSpec* spec = registry().find(r.metric))
-        r.higher_is_better = spec->higher_is_better;
+      if (const MetricSpec* spec = registry().find(r.metric)) r.higher_is_better = spec->higher_is_better;
       const std::string name = report_file_name(r.reference, r.distorted);
       if (std::filesystem::exists(o_.report_dir / name)) r.report = name;
       rows.push_back(std::move(r));
     }
-    const std::string index = o_.shard ? "index-" + std::to_string(o_.shard->index) + "-of-" +
-                                             std::to_string(o_.shard->count) + ".html"
-                                       : "index.html";
-    write_report_index(o_.report_dir / index, rows, "qm3d batch: " + o_.list.filename().string());
+    const std::string index =
+        o_.shard ? "index-" + std::to_string(o_.shard->index) + "-of-" +
+                       std::to_string(o_.shard->count) + ".html"
+                 : "index.html";
+    write_report_index(o_.report_dir / index, rows,
+                       "qm3d batch: " + o_.list.filename().string());
   }
 
   const std::vector<std::string>& errors() const { return errors_; }
@@ -396,9 +394,8 @@ struct ScoringSummary {
 
 // Scores the rows of `todo`, o.jobs jobs at a time, appending each row to `out` as it is done.
 // Throws InputError when a row cannot be written (the jobs stop; the rows written stay).
-ScoringSummary score_jobs(const BatchOptions& o,
-                          const std::vector<std::pair<ListPair, std::string>>& todo,
-                          LockedResults& out, const std::string& settings) {
+ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<ListPair, std::string>>& todo,
+                LockedResults& out, const std::string& settings) {
   // A worker process writes its pair's report itself; here only the folder is made.
   PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
   const std::vector<PairJob> jobs = group_jobs(todo, !o.report_dir.empty());
@@ -520,10 +517,9 @@ int run_batch(const BatchOptions& options) {
   BatchOptions o = options;
   o.value_names = list_value_names(pairs);
   o.textures = list_textures(pairs, o.list);
-  if (o.shard)
-    pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
-      return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
-    });
+  if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
+    return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
+  });
   refuse_input_as_output(o, pairs);
   if (!o.report_dir.empty()) make_report_dir(o.report_dir);  // before the output is touched
   if (o.retry_failed && !o.resume) throw std::invalid_argument("--retry-failed needs --resume");
@@ -544,8 +540,8 @@ int run_batch(const BatchOptions& options) {
     }
   }
   if (!o.quiet && todo.size() < rows) {
-    std::cerr << "batch: " << rows - todo.size() << " pairs already done, " << todo.size()
-              << " to go\n";
+    std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
+              << todo.size() << " to go\n";
   }
   return finish(o, score_jobs(o, todo, out, settings));
 }

@@ -45,8 +45,7 @@ std::string option_help(const std::vector<const MetricSpec*>& specs, const std::
   }
   if (helps.size() == 1) return helps.front().second;
   std::string text;
-  for (const auto& [metric, help] : helps)
-    text += (text.empty() ? "" : "; ") + metric + ": " + help;
+  for (const auto& [metric, help] : helps) text += (text.empty() ? "" : "; ") + metric + ": " + help;
   return text;
 }
 
@@ -89,7 +88,9 @@ void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& spe
         continue;
       }
       CLI::Option* opt = cmd->add_option(flag, cli.text[o.name], help);
-      { opt->default_str(d.is_string() ? d.get<std::string>() : d.dump()); }
+      {
+        opt->default_str(d.is_string() ? d.get<std::string>() : d.dump());
+      }
       if (!o.choices.empty()) opt->check(CLI::IsMember(o.choices));
       if (d.is_number()) {
         opt->type_name(d.is_number_integer() ? "INT" : "FLOAT");
@@ -115,8 +116,7 @@ OptionValues metric_option_values(const std::vector<const MetricSpec*>& specs,
       }
       std::string text;
       if (d.is_array()) {
-        for (const std::string& item : cli.lists.at(o.name))
-          text += (text.empty() ? "" : ",") + item;
+        for (const std::string& item : cli.lists.at(o.name)) text += (text.empty() ? "" : ",") + item;
       } else {
         text = cli.text.at(o.name);
       }
@@ -168,15 +168,15 @@ void add_run_options(CLI::App* cmd, RunCli& r, const MetricSpec* spec) {
   CLI::Option* weights = nullptr;
   if (spec) {
     weights = cmd->add_option("--weights", r.weights,
-                              "Weights of the 8 features replacing the published model")
-                  ->expected(8)
-                  ->delimiter(',');
+                                       "Weights of the 8 features replacing the published model")
+                           ->expected(8)
+                           ->delimiter(',');
   }
-  auto* model =
-      cmd->add_option("--model", r.model_file,
-                      spec ? std::string(kModelHelp)
-                           : std::string(kModelHelp) + "; applies to the metric the file names")
-          ->type_name("MODEL.json");
+  auto* model = cmd->add_option("--model", r.model_file,
+                                spec ? std::string(kModelHelp)
+                                     : std::string(kModelHelp) +
+                                           "; applies to the metric the file names")
+                    ->type_name("MODEL.json");
   if (weights) model->excludes(weights);
 }
 
@@ -193,7 +193,8 @@ void add_texture_options(CLI::App* cmd, std::string& ref_texture, std::string& d
   const std::string what =
       " texture map (PNG, JPEG, BMP, TGA): replaces the map of every material of that mesh, "
       "every face with texture coordinates takes its colour from it (mmetric's --inputMap";
-  cmd->add_option("--ref-texture", ref_texture, "The reference's" + what + "A)")->type_name("FILE");
+  cmd->add_option("--ref-texture", ref_texture, "The reference's" + what + "A)")
+      ->type_name("FILE");
   cmd->add_option("--dist-texture", dist_texture, "The distorted's" + what + "B)")
       ->type_name("FILE");
 }

@@ -57,9 +57,8 @@ ColoredCloud vertex_cloud_of(const std::filesystem::path& path) {
 // --normals), 8-bit colours, as mmetric writes them.
 int run_grid_sample(const SampleCommands& c) {
   if (c.vertices || c.sampling.points > 0 || c.sampling.density != 0) {
-    throw std::invalid_argument(
-        "sample --mode grid: --points, --density and --vertices apply "
-        "to --mode random");
+    throw std::invalid_argument("sample --mode grid: --points, --density and --vertices apply "
+                                "to --mode random");
   }
   check_outputs({{"MESH", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
   GridSamplingOptions o;
@@ -75,8 +74,7 @@ int run_grid_sample(const SampleCommands& c) {
     o.box = b;
   }
   const Input input = registry().read(c.input, texture_read_options(c));
-  if (!input.is_mesh())
-    throw FormatError(c.input + ": a point cloud, not a mesh (no faces to sample)");
+  if (!input.is_mesh()) throw FormatError(c.input + ": a point cloud, not a mesh (no faces to sample)");
   const GridSamples s = registry().grid_sampler()(input, o);
   for (const std::string& w : s.warnings) warn(c.input + ": " + w);
   if (s.colours.empty()) warn(c.input + ": no vertex colours: the cloud has none");
@@ -104,10 +102,11 @@ int run_sample(const SampleCommands& c) {
     throw std::invalid_argument("sample: give exactly one of --points, --density, --vertices");
   }
   check_outputs({{"MESH", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
-  const ColoredCloud cloud =
-      c.vertices ? vertex_cloud_of(c.input)
-                 : registry().sampler()(registry().read(c.input, texture_read_options(c)),
-                                        {c.sampling.points, c.sampling.density, c.sampling.seed});
+  const ColoredCloud cloud = c.vertices
+                                 ? vertex_cloud_of(c.input)
+                                 : registry().sampler()(registry().read(c.input, texture_read_options(c)),
+                                                        {c.sampling.points, c.sampling.density,
+                                                         c.sampling.seed});
   write_colored_ply(c.output, cloud.positions, cloud.colors, {});
   return 0;
 }
@@ -125,9 +124,8 @@ int run_texture_to_vertex(const SampleCommands& c) {
                                                  texture_read_options(c), &no_texture);
   if (!textured) {
     throw FormatError(no_texture.empty()
-                          ? c.input +
-                                ": not a textured mesh (no texture coordinates, or an OBJ "
-                                "with vertex colours)"
+                          ? c.input + ": not a textured mesh (no texture coordinates, or an OBJ "
+                                      "with vertex colours)"
                           : no_texture.front());
   }
   const ColoredMesh& m = textured->file.mesh;
@@ -162,22 +160,19 @@ std::unique_ptr<SampleCommands> add_sample_commands(
       ->type_name("CLOUD.ply");
   add_sampling_options(c->sample, c->sampling, "");
   c->sample->add_flag("--vertices", c->vertices, "Write the mesh's vertices instead of samples");
-  c->sample
-      ->add_option("--mode", c->mode,
-                   "random: area-uniform random samples (--points / --density); grid: MPEG "
-                   "mmetric's grid sampling (mm sample --mode grid --useNormal), the samples "
-                   "V-DMC's PSNR compares")
+  c->sample->add_option("--mode", c->mode,
+                        "random: area-uniform random samples (--points / --density); grid: MPEG "
+                        "mmetric's grid sampling (mm sample --mode grid --useNormal), the samples "
+                        "V-DMC's PSNR compares")
       ->check(CLI::IsMember({"random", "grid"}))
       ->capture_default_str();
-  c->sample
-      ->add_option("--grid-size", c->grid_size,
-                   "Grid mode: nodes along the box's longest side (mmetric --gridSize)")
+  c->sample->add_option("--grid-size", c->grid_size,
+                        "Grid mode: nodes along the box's longest side (mmetric --gridSize)")
       ->check(CLI::Range(2, 1000000))
       ->capture_default_str();
-  c->sample
-      ->add_option("--box", c->box,
-                   "Grid mode: the grid's box MINX MINY MINZ MAXX MAXY MAXZ (mmetric "
-                   "--minPos/--maxPos; default: the mesh's own vertex box)")
+  c->sample->add_option("--box", c->box,
+                        "Grid mode: the grid's box MINX MINY MINZ MAXX MAXY MAXZ (mmetric "
+                        "--minPos/--maxPos; default: the mesh's own vertex box)")
       ->expected(6);
   c->sample->add_flag("--normals", c->normals,
                       "Grid mode: also write each sample's face normal (nx, ny, nz)");
@@ -189,11 +184,11 @@ std::unique_ptr<SampleCommands> add_sample_commands(
       "Texture map (PNG, JPEG, BMP, TGA) replacing the mesh's own: every face with texture "
       "coordinates takes its colour from it (mmetric's --inputMap)";
   c->sample->add_option("--texture", c->texture, texture_help)->type_name("FILE");
-  c->texture_to_vertex = app.add_subcommand(
-      "texture-to-vertex",
-      "Write a textured mesh (OBJ + MTL + map, or PLY with TextureFile) as a vertex-coloured PLY "
-      "mesh: bilinear texture colour at each vertex's UV, averaged over "
-      "the UVs of seam vertices");
+  c->texture_to_vertex =
+      app.add_subcommand("texture-to-vertex",
+                         "Write a textured mesh (OBJ + MTL + map, or PLY with TextureFile) as a vertex-coloured PLY "
+                         "mesh: bilinear texture colour at each vertex's UV, averaged over "
+                         "the UVs of seam vertices");
   add_common(c->texture_to_vertex);
   c->texture_to_vertex->add_option("IN", c->input, "Textured OBJ or PLY")->required();
   c->texture_to_vertex->add_option("--texture", c->texture, texture_help)->type_name("FILE");

@@ -46,6 +46,7 @@ struct Row {
 
 std::string where(const Row& r) { return r.file + ":" + std::to_string(r.line_no); }
 
+
 // Where a list's columns are: by position (reference,distorted[,metric]) unless a header names
 // them in another order.
 struct ListColumns {
@@ -56,6 +57,7 @@ struct ListColumns {
   std::size_t dist_texture = std::numeric_limits<std::size_t>::max();
 };
 constexpr std::size_t kNoColumn = std::numeric_limits<std::size_t>::max();
+
 
 // A first line naming any of the list's columns is a header (a path is never just "metric").
 bool is_list_header(const std::vector<std::string>& fields) {

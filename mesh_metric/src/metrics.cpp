@@ -14,14 +14,10 @@ namespace {
 
 MeshFormat mesh_format(FileFormat f, const std::filesystem::path& path) {
   switch (f) {
-    case FileFormat::kObj:
-      return MeshFormat::kObj;
-    case FileFormat::kOff:
-      return MeshFormat::kOff;
-    case FileFormat::kPly:
-      return MeshFormat::kPly;
-    case FileFormat::kPcd:
-      break;
+    case FileFormat::kObj: return MeshFormat::kObj;
+    case FileFormat::kOff: return MeshFormat::kOff;
+    case FileFormat::kPly: return MeshFormat::kPly;
+    case FileFormat::kPcd: break;
   }
   throw FormatError(path.string() + ": a PCD file holds a point cloud, not a mesh");
 }

@@ -27,8 +27,7 @@ CloudData read_ply(const std::filesystem::path& path, ColourScale colour_scale) 
   // ASCII `float` values as float32, as the reference's tinyply reads them (SPEC-PCQM §9.1).
   ply::Content content = ply::read(path, ply::AsciiFloat::kAsDeclared, colour_scale);
   CloudData out{ColoredCloud{std::move(content.positions), std::move(content.colors)},
-                std::move(content.warnings),
-                {}};
+                std::move(content.warnings), {}};
   out.normals = std::move(content.normals);
   return out;
 }

@@ -7,17 +7,17 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "mpeg_reference.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/mesh/metrics.h"
 #include "qm3d/render/ibsm.h"
+#include "mpeg_reference.h"
 #include "test_paths.h"
 
 namespace qm3d::render {
@@ -65,24 +65,11 @@ constexpr double kTolerance = 1e-6;
 
 const std::map<std::string, std::string> kColumns = {
     {"UnmatchedPixelPercentage", "unmatched_pixel_percentage"},
-    {"R_MSE", "r_mse"},
-    {"G_MSE", "g_mse"},
-    {"B_MSE", "b_mse"},
-    {"RGB_MSE", "rgb_mse"},
-    {"Y_MSE", "y_mse"},
-    {"U_MSE", "u_mse"},
-    {"V_MSE", "v_mse"},
-    {"YUV_MSE", "yuv_mse"},
-    {"GEO_MSE", "geo_mse"},
-    {"R_PSNR", "r_psnr"},
-    {"G_PSNR", "g_psnr"},
-    {"B_PSNR", "b_psnr"},
-    {"RGB_PSNR", "rgb_psnr"},
-    {"Y_PSNR", "y_psnr"},
-    {"U_PSNR", "u_psnr"},
-    {"V_PSNR", "v_psnr"},
-    {"YUV_PSNR", "yuv_psnr"},
-    {"GEO_PSNR", "geo_psnr"}};
+    {"R_MSE", "r_mse"}, {"G_MSE", "g_mse"}, {"B_MSE", "b_mse"}, {"RGB_MSE", "rgb_mse"},
+    {"Y_MSE", "y_mse"}, {"U_MSE", "u_mse"}, {"V_MSE", "v_mse"}, {"YUV_MSE", "yuv_mse"},
+    {"GEO_MSE", "geo_mse"}, {"R_PSNR", "r_psnr"}, {"G_PSNR", "g_psnr"}, {"B_PSNR", "b_psnr"},
+    {"RGB_PSNR", "rgb_psnr"}, {"Y_PSNR", "y_psnr"}, {"U_PSNR", "u_psnr"}, {"V_PSNR", "v_psnr"},
+    {"YUV_PSNR", "yuv_psnr"}, {"GEO_PSNR", "geo_psnr"}};
 
 /// The maps of mmetric's --inputMapA / --inputMapB in `args` ("" when absent).
 std::pair<std::string, std::string> maps_of(const std::string& args) {
@@ -98,7 +85,7 @@ std::pair<std::string, std::string> maps_of(const std::string& args) {
 // mmetric on a real textured frame (shared/data/reference/mpeg/textured/, README there), its maps
 // given as --ref-texture / --dist-texture: every printed value within 1e-8 relative (mm prints
 // 9 digits). The texel lookups follow mmetric's bilinear rule to the float operation
-// (mesh/src/mm_texture.cpp).
+// (mesh_metric/src/mm_texture.cpp).
 TEST(IbsmReference, TexturedFrameWithMapsGivenOnTheCommandLine) {
   constexpr double kTexturedTolerance = 1e-8;
   const std::vector<test::PcErrorCase> rows =
@@ -146,8 +133,7 @@ TEST(IbsmReference, EveryValueOfEveryCase) {
     SCOPED_TRACE(row.at("case"));
     const Input a = registry().read(test::shared_data() / row.at("mesh_a"));
     const Input b = registry().read(test::shared_data() / row.at("mesh_b"));
-    const MetricResult r =
-        run_metric(registry().get("ibsm"), a, b, run, options_of(row.at("args")));
+    const MetricResult r = run_metric(registry().get("ibsm"), a, b, run, options_of(row.at("args")));
     auto check = [&](const std::string& what, double got, double want) {
       const double d = deviation(got, want);
       EXPECT_LE(d, kTolerance) << what << ": got " << got << ", mmetric " << want;
@@ -159,8 +145,7 @@ TEST(IbsmReference, EveryValueOfEveryCase) {
       check(column, *got, std::stod(row.at(column)));
     }
     check("BoxRatio", r.details.at("box_ratio").get<double>(), std::stod(row.at("BoxRatio")));
-    check("BSphereRad", r.details.at("bsphere_radius").get<double>(),
-          std::stod(row.at("BSphereRad")));
+    check("BSphereRad", r.details.at("bsphere_radius").get<double>(), std::stod(row.at("BSphereRad")));
     std::stringstream ctr(row.at("BSphereCtr"));
     for (int k = 0; k < 3; ++k) {
       double want;
@@ -169,8 +154,7 @@ TEST(IbsmReference, EveryValueOfEveryCase) {
     }
     EXPECT_DOUBLE_EQ(r.score, *find_value(r.values, "yuv_psnr"));
   }
-  std::cout << "[ibsm reference] worst relative deviation " << worst << " (" << worst_where
-            << ")\n";
+  std::cout << "[ibsm reference] worst relative deviation " << worst << " (" << worst_where << ")\n";
 }
 
 }  // namespace
