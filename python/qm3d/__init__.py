@@ -484,17 +484,19 @@ def _options_for(name, options):
 
 # ---- tools ---------------------------------------------------------------------------------
 
-def read_mesh(path, colour_scale="auto"):
-    """Reads a mesh file (OBJ, OFF, PLY; a textured OBJ gets its texture's colours) as qm3d's
-    metrics read it (colour_scale as for the metrics).
+def read_mesh(path, colour_scale="auto", texture=None):
+    """Reads a mesh file (OBJ, OFF, PLY; a textured mesh gets its texture's colours) as qm3d's
+    metrics read it (colour_scale as for the metrics; texture: a map replacing the file's own,
+    as --texture).
 
     Returns:
         dict: positions (V, 3) float64, colors (V, 3) float64 in 0-1 (None when the file has
         none), faces (F, 3) uint32, warnings (list of str: repairs made, e.g. vertices no face
         uses dropped).
     """
-    p, c, f, w = _qm3d.Input.from_file(_os.fsdecode(path),
-                                       _colour_scale(colour_scale)).mesh_arrays()
+    p, c, f, w = _qm3d.Input.from_file(
+        _os.fsdecode(path), _colour_scale(colour_scale),
+        "" if texture is None else _os.fsdecode(texture), "texture=").mesh_arrays()
     return {"positions": p, "colors": c, "faces": f, "warnings": list(w)}
 
 
@@ -557,7 +559,7 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
 
 def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="fibonacci",
            culling=True, lighting="none", splat_size=0.0, splat_shape="disc", frame=None,
-           threads=0, colour_scale="auto"):
+           threads=0, colour_scale="auto", texture=None):
     """Renders an object as ``qm3d ibsm`` sees it: orthographic views from the same cameras,
     with the same rasteriser (mmetric's sw_raster for meshes, splats for clouds).
 
@@ -573,6 +575,7 @@ def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="
             ibsm result to get its images exactly; None = the object's own (its box's centre and
             half diagonal + 1 %).
         threads: OpenMP threads (0 = all cores); the images do not depend on it.
+        texture: a texture map replacing the mesh file's own (as ``ibsm``'s ``ref_texture``).
 
     Returns:
         dict: ``views``, a list (one per view) of dicts with ``direction`` (3 floats, from the
@@ -589,7 +592,7 @@ def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="
     options = {k: _option_value(spec, by_name[k], v) for k, v in given.items()}
     if frame is not None:
         frame = [_finite("frame", v) for v in frame]
-    inputs = _Inputs(obj, "obj", colour_scale)
+    inputs = _Inputs(obj, "obj", colour_scale, texture)
     out, centre, radius = _qm3d.render_views(inputs.any(), _json.dumps(options),
                                              frame, _thread_count(threads))
     result = []
