@@ -479,13 +479,14 @@ void read_faces(Cursor& cur, const Element& e, const std::string& name, Content&
       }
       const double n = cur.value(p, true);
       if (n < 0) fail(name, where + ": negative list length");
-      for (double j = 0; j < n; ++j) read_face_value(cur, p, int(k), list, texcoord, where, name, out);
+      for (double j = 0; j < n; ++j)
+        read_face_value(cur, p, int(k), list, texcoord, where, name, out);
       if (static_cast<int>(k) == list) corners = n;
       if (static_cast<int>(k) == texcoord) texcoords = n;
     }
     if (list >= 0 && corners < 3) {
-      fail(name, where + " has " + std::to_string(static_cast<int>(corners)) +
-                     " vertices (need 3)");
+      fail(name,
+           where + " has " + std::to_string(static_cast<int>(corners)) + " vertices (need 3)");
     }
     if (list >= 0 && texcoord >= 0 && texcoords != 2 * corners) {
       fail(name, where + " has " + integer_text(texcoords) + " texcoord values for " +

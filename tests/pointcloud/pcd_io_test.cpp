@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
-#include <pcl/filters/impl/filter.hpp>  // removeNaNFromPointCloud (pcl_filters is not linked)
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
@@ -18,6 +17,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <pcl/filters/impl/filter.hpp>  // removeNaNFromPointCloud (pcl_filters is not linked)
 #include <random>
 #include <string>
 #include <vector>
@@ -336,8 +336,9 @@ TEST(PcdReaderVsPcl, AllNanCloudIsAnErrorNamingTheFile) {
       read_cloud_data(path, CloudFormat::kPcd);
       ADD_FAILURE() << "no error for " << path;
     } catch (const FormatError& err) {
-      EXPECT_EQ(std::string(err.what()),
-                path.string() + ": all 128 points have a NaN or infinite coordinate (no valid point)");
+      EXPECT_EQ(
+          std::string(err.what()),
+          path.string() + ": all 128 points have a NaN or infinite coordinate (no valid point)");
     }
   }
 }

@@ -1,6 +1,7 @@
 // Textured meshes (OBJ + MTL + texture map; PLY with texture coordinates and `comment
-// TextureFile`; maps in PNG, JPEG, BMP or TGA): texture colours transferred to the vertices, as the CMDM paper scored textured meshes (seed document 1.3.4), and kept with their
-// UVs for surface sampling.
+// TextureFile`; maps in PNG, JPEG, BMP or TGA): texture colours transferred to the vertices, as the
+// CMDM paper scored textured meshes (seed document 1.3.4), and kept with their UVs for surface
+// sampling.
 //
 // Conventions: UV (0, 0) is the bottom-left corner of the image, (1, 1) the top-right (OBJ);
 // texel (i, j) is centred at ((i + 0.5) / W, 1 - (j + 0.5) / H); lookups are bilinear between
