@@ -285,3 +285,36 @@ TEST_F(TextureCli, PsnrConventionsMmetricOnCloudsFromTheToolsJson) {
 
 }  // namespace
 }  // namespace qm3d
+
+namespace qm3d {
+namespace {
+
+// mmetric's textured frame from the tool's JSON (one case; the library test runs all three).
+TEST_F(TextureCli, MmetricTexturedFrameFromTheToolsJson) {
+  const fs::path dir = test::reference_dir() / "mpeg" / "textured";
+  for (const test::PcErrorCase& c : test::mpeg_cases("textured/mm_ibsm_textured_reference.csv")) {
+    if (c.name != "bb3_qp16") continue;
+    const std::string png = "basketball_player_00000003.png";
+    const test::CliRun r =
+        test::run_qm3d("ibsm " + c.column.at("mesh_a") + " " + c.column.at("mesh_b") +
+                           " --ref-texture " + png + " --dist-texture " + png + " --no-ssim --json",
+                       dir, dir_ / "io", "");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json f = nlohmann::json::parse(r.out)["features"];
+    int checked = 0;
+    for (const auto& [column, text] : c.column) {
+      std::string name = column == "UnmatchedPixelPercentage" ? "unmatched_pixel_percentage" : column;
+      for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (!f.contains(name)) continue;
+      const double want = std::stod(text);
+      EXPECT_NEAR(f[name].get<double>(), want, 1e-8 * std::fabs(want)) << column;
+      ++checked;
+    }
+    EXPECT_EQ(checked, 19);
+    return;
+  }
+  FAIL() << "case bb3_qp16 not found";
+}
+
+}  // namespace
+}  // namespace qm3d
