@@ -69,7 +69,7 @@ ColoredCloud sample(const Input& input, const SurfaceSampling& s) {
 void add_texture_warnings(const Input& input, GridSamples& samples) {
   const std::string prefix = input.path().string() + ": ";
   for (const std::string& w : input.mesh().warnings) {
-    if (w.find("read without its texture") == std::string::npos) continue;
+    if (w.find(kReadWithoutTexture) == std::string::npos) continue;
     samples.warnings.push_back(w.compare(0, prefix.size(), prefix) == 0 ? w.substr(prefix.size())
                                                                         : w);
   }

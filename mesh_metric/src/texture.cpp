@@ -524,7 +524,7 @@ std::optional<TexturedMesh> read_textured_mesh(const std::string& bytes, MeshFor
   if (format == MeshFormat::kObj) m = textured_obj(bytes, path, options, why);
   if (format == MeshFormat::kPly) m = textured_ply(bytes, path, options, why);
   if (!m && !why.empty() && warnings) {
-    warnings->push_back(path.string() + ": " + why + "; read without its texture" +
+    warnings->push_back(path.string() + ": " + why + "; " + kReadWithoutTexture +
                         (options.texture.empty()
                              ? " (give its map with " + options.texture_option + ")"
                              : std::string()));

@@ -92,6 +92,9 @@ TexturedMesh parse_textured_obj(const std::string& obj_text, const std::filesyst
 /// the file, the reason and options.texture_option, added to `warnings` (when not null).
 /// Throws FormatError / InputError naming the file for an image that cannot be decoded, a given
 /// map that is not there, or malformed texture coordinates.
+/// The words of read_textured_mesh's warning that a mesh is read without its texture.
+inline constexpr const char* kReadWithoutTexture = "read without its texture";
+
 /// False when the file certainly is not a textured mesh (an OFF; a PLY whose header declares no
 /// texture coordinates, with no map given): read_textured_mesh need not read it.
 bool may_be_textured(const std::filesystem::path& path, MeshFormat format,
