@@ -89,7 +89,14 @@ ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std:
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
   try {
-    const Input r = registry().read(ref, o.request.read), d = registry().read(dist, o.request.read);
+    ReadOptions ref_read = o.request.read, dist_read = o.request.read;
+    if (const auto t = o.textures.find({pair.reference, pair.distorted}); t != o.textures.end()) {
+      if (!t->second.first.empty()) ref_read.texture = resolve(o.list, t->second.first);
+      if (!t->second.second.empty()) dist_read.texture = resolve(o.list, t->second.second);
+    }
+    ref_read.texture_option = "the list's ref_texture column";
+    dist_read.texture_option = "the list's dist_texture column";
+    const Input r = registry().read(ref, ref_read), d = registry().read(dist, dist_read);
     const auto specs = metrics_for(metric, r, d);
     ScoreRequest request = o.request;
     request.release_inputs = o.report_dir.empty();  // a report reads both inputs
@@ -486,6 +493,22 @@ std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
   return csv_value_names(specs);
 }
 
+// Each pair's texture maps; a pair listed twice with other maps is an error (its rows are keyed
+// by reference, distorted and metric).
+std::map<std::pair<std::string, std::string>, std::pair<std::string, std::string>> list_textures(
+    const std::vector<ListPair>& pairs, const std::filesystem::path& list) {
+  std::map<std::pair<std::string, std::string>, std::pair<std::string, std::string>> out;
+  for (const ListPair& p : pairs) {
+    const std::pair<std::string, std::string> maps{p.ref_texture, p.dist_texture};
+    const auto [at, added] = out.emplace(std::pair{p.reference, p.distorted}, maps);
+    if (!added && at->second != maps) {
+      throw FormatError(list.string() + ": " + p.reference + ", " + p.distorted +
+                        " is listed with different texture maps");
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 int run_batch(const BatchOptions& options) {
@@ -493,6 +516,7 @@ int run_batch(const BatchOptions& options) {
       parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string());
   BatchOptions o = options;
   o.value_names = list_value_names(pairs);
+  o.textures = list_textures(pairs, o.list);
   if (o.shard) pairs = select_shard(pairs, *o.shard, [&](const ListPair& p) {
     return input_bytes(resolve(o.list, p.reference)) + input_bytes(resolve(o.list, p.distorted));
   });
@@ -569,8 +593,10 @@ void run_worker_job(const BatchOptions& o, const std::string& line) {
 
 int run_batch_worker(const BatchOptions& options) {
   BatchOptions o = options;
-  o.value_names = list_value_names(
-      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string()));
+  const std::vector<ListPair> pairs =
+      parse_pair_list(read_file_bytes(options.list, kMaxTableBytes), options.list.string());
+  o.value_names = list_value_names(pairs);
+  o.textures = list_textures(pairs, o.list);
   // A worker outliving its batch (killed with SIGKILL) would go on scoring for nobody.
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   std::string line;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ struct BatchOptions {
   /// names (compare: all metrics), so that shards and resumed runs share one header. Set by
   /// run_batch / run_batch_worker from the list.
   std::vector<std::string> value_names;
+  /// The texture maps of each (reference, distorted) of the list (its ref_texture and
+  /// dist_texture columns, as written there). Set by run_batch / run_batch_worker from the list.
+  std::map<std::pair<std::string, std::string>, std::pair<std::string, std::string>> textures;
   std::string program;        ///< argv[0]
   std::vector<std::string> command_line;  ///< argv[1..]: this batch's own arguments
 };

@@ -114,6 +114,7 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
 struct ScoreCli {
   std::string ref, dist;
   std::string colour_scale = "auto";
+  std::string ref_texture, dist_texture;
   bool progress = false;
   RunCli run;
   MetricOptionsCli options;
@@ -135,6 +136,8 @@ struct ScoreCommand {
 void check_score_outputs(const ScoreCli& cli, bool report_command) {
   const std::vector<NamedPath> inputs = {{"REF", cli.ref},
                                          {"DIST", cli.dist},
+                                         {"--ref-texture", cli.ref_texture},
+                                         {"--dist-texture", cli.dist_texture},
                                          {"--model", cli.run.model_file},
                                          {"--three-js", cli.report.three_js}};
   if (report_command) {
@@ -155,8 +158,10 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   if (!cli.report.file.empty()) report = report_settings(cli.report);
   check_score_outputs(cli, c.report);
   request.keep_per_element = report.has_value();
-  const ReadOptions read = read_options(cli.colour_scale);
-  const Input ref = registry().read(cli.ref, read), dist = registry().read(cli.dist, read);
+  const Input ref =
+      registry().read(cli.ref, read_options(cli.colour_scale, cli.ref_texture, "--ref-texture"));
+  const Input dist =
+      registry().read(cli.dist, read_options(cli.colour_scale, cli.dist_texture, "--dist-texture"));
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
   std::vector<MetricResult> results;
   const bool show = !g.quiet && (cli.progress || stderr_is_terminal());
@@ -246,6 +251,7 @@ int run(int argc, char** argv) {
     c.cmd->add_option("DIST", cli.dist, "Distorted")->required();
     add_run_options(c.cmd, cli.run, c.spec);
     add_read_options(c.cmd, cli.colour_scale);
+    add_texture_options(c.cmd, cli.ref_texture, cli.dist_texture);
     add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
                        cli.options);
     if (!c.report) add_output_options(c.cmd, cli.out, c.spec && (c.spec->per_element_on_input ||

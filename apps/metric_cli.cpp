@@ -208,6 +208,24 @@ void add_read_options(CLI::App* cmd, std::string& colour_scale) {
       ->capture_default_str();
 }
 
+void add_texture_options(CLI::App* cmd, std::string& ref_texture, std::string& dist_texture) {
+  const std::string what =
+      " texture map (PNG, JPEG, BMP, TGA): replaces the map of every material of that mesh, "
+      "every face with texture coordinates takes its colour from it (mmetric's --inputMap";
+  cmd->add_option("--ref-texture", ref_texture, "The reference's" + what + "A)")
+      ->type_name("FILE");
+  cmd->add_option("--dist-texture", dist_texture, "The distorted's" + what + "B)")
+      ->type_name("FILE");
+}
+
+ReadOptions read_options(const std::string& colour_scale, const std::string& texture,
+                         const std::string& texture_option) {
+  ReadOptions o = read_options(colour_scale);
+  o.texture = texture;
+  o.texture_option = texture_option;
+  return o;
+}
+
 ReadOptions read_options(const std::string& colour_scale) {
   ReadOptions o;
   o.colour_scale = parse_colour_scale(colour_scale);

@@ -54,6 +54,13 @@ void add_read_options(CLI::App* cmd, std::string& colour_scale);
 /// The read options of --colour-scale's value.
 ReadOptions read_options(const std::string& colour_scale);
 
+/// Adds --ref-texture and --dist-texture (a texture map replacing a textured mesh's own,
+/// ReadOptions::texture).
+void add_texture_options(CLI::App* cmd, std::string& ref_texture, std::string& dist_texture);
+/// The read options of --colour-scale with a texture map given by `texture_option`.
+ReadOptions read_options(const std::string& colour_scale, const std::string& texture,
+                         const std::string& texture_option);
+
 /// The request of a metric command (`spec` set) or of compare / batch (`spec` null).
 ScoreRequest score_request(const RunCli& r, const MetricSpec* spec, int threads,
                            const std::string& data_dir);

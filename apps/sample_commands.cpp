@@ -41,6 +41,14 @@ void write_colored_ply(const std::filesystem::path& path, const std::vector<Vec3
   ply::write(path, data);
 }
 
+// The texture map of --texture, named as such in the warning about a mesh without a usable one.
+ReadOptions texture_read_options(const SampleCommands& c) {
+  ReadOptions o;
+  o.texture = c.texture;
+  o.texture_option = "--texture";
+  return o;
+}
+
 ColoredCloud vertex_cloud_of(const std::filesystem::path& path) {
   return vertex_cloud(mesh::read_mesh(path).mesh);
 }
@@ -52,7 +60,7 @@ int run_grid_sample(const SampleCommands& c) {
     throw std::invalid_argument("sample --mode grid: --points, --density and --vertices apply "
                                 "to --mode random");
   }
-  check_outputs({{"MESH", c.input}}, {{"-o", c.output}});
+  check_outputs({{"MESH", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
   GridSamplingOptions o;
   o.grid_size = c.grid_size;
   o.all_axes = c.all_axes;
@@ -65,7 +73,7 @@ int run_grid_sample(const SampleCommands& c) {
     }
     o.box = b;
   }
-  const Input input = registry().read(c.input);
+  const Input input = registry().read(c.input, texture_read_options(c));
   if (!input.is_mesh()) throw FormatError(c.input + ": a point cloud, not a mesh (no faces to sample)");
   const GridSamples s = registry().grid_sampler()(input, o);
   for (const std::string& w : s.warnings) warn(c.input + ": " + w);
@@ -93,10 +101,10 @@ int run_sample(const SampleCommands& c) {
   if (c.vertices == counted) {
     throw std::invalid_argument("sample: give exactly one of --points, --density, --vertices");
   }
-  check_outputs({{"MESH", c.input}}, {{"-o", c.output}});
+  check_outputs({{"MESH", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
   const ColoredCloud cloud = c.vertices
                                  ? vertex_cloud_of(c.input)
-                                 : registry().sampler()(registry().read(c.input),
+                                 : registry().sampler()(registry().read(c.input, texture_read_options(c)),
                                                         {c.sampling.points, c.sampling.density,
                                                          c.sampling.seed});
   write_colored_ply(c.output, cloud.positions, cloud.colors, {});
@@ -104,9 +112,23 @@ int run_sample(const SampleCommands& c) {
 }
 
 int run_texture_to_vertex(const SampleCommands& c) {
-  check_outputs({{"IN", c.input}}, {{"-o", c.output}});
-  const mesh::TexturedMesh textured = mesh::read_textured_obj(c.input);
-  const ColoredMesh& m = textured.file.mesh;
+  check_outputs({{"IN", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
+  const std::filesystem::path path = c.input;
+  const FileFormat file_format = detect_format(path);
+  if (file_format == FileFormat::kPcd) throw FormatError(c.input + ": a point cloud, not a mesh");
+  const mesh::MeshFormat format = file_format == FileFormat::kObj   ? mesh::MeshFormat::kObj
+                                  : file_format == FileFormat::kOff ? mesh::MeshFormat::kOff
+                                                                    : mesh::MeshFormat::kPly;
+  std::vector<std::string> no_texture;
+  const auto textured = mesh::read_textured_mesh(read_file_bytes(path), format, path,
+                                                 texture_read_options(c), &no_texture);
+  if (!textured) {
+    throw FormatError(no_texture.empty()
+                          ? c.input + ": not a textured mesh (no texture coordinates, or an OBJ "
+                                      "with vertex colours)"
+                          : no_texture.front());
+  }
+  const ColoredMesh& m = textured->file.mesh;
   write_colored_ply(c.output, m.positions, m.colors, m.triangles);
   return 0;
 }
@@ -158,13 +180,18 @@ std::unique_ptr<SampleCommands> add_sample_commands(
                       "Grid mode: rays along all three axes (mmetric without --useNormal)");
   c->sample->add_flag("--bilinear", c->bilinear,
                       "Grid mode: bilinear texture lookups for textured OBJ (mmetric --bilinear)");
+  const char* texture_help =
+      "Texture map (PNG, JPEG, BMP, TGA) replacing the mesh's own: every face with texture "
+      "coordinates takes its colour from it (mmetric's --inputMap)";
+  c->sample->add_option("--texture", c->texture, texture_help)->type_name("FILE");
   c->texture_to_vertex =
       app.add_subcommand("texture-to-vertex",
-                         "Write a textured OBJ (OBJ + MTL + PNG/JPEG) as a vertex-coloured PLY "
+                         "Write a textured mesh (OBJ + MTL + map, or PLY with TextureFile) as a vertex-coloured PLY "
                          "mesh: bilinear texture colour at each vertex's UV, averaged over "
                          "the UVs of seam vertices");
   add_common(c->texture_to_vertex);
-  c->texture_to_vertex->add_option("IN", c->input, "Textured OBJ")->required();
+  c->texture_to_vertex->add_option("IN", c->input, "Textured OBJ or PLY")->required();
+  c->texture_to_vertex->add_option("--texture", c->texture, texture_help)->type_name("FILE");
   c->texture_to_vertex->add_option("-o,--output", c->output, "Mesh to write (binary PLY)")
       ->required()
       ->type_name("OUT.ply");

@@ -36,6 +36,7 @@ struct SampleCommands {
   bool normals = false;               ///< --normals: write nx, ny, nz
   bool all_axes = false;
   bool bilinear = false;
+  std::string texture;                ///< --texture: a map replacing the mesh's own
 };
 
 /// Registers `sample` and `texture-to-vertex`; `add_common` adds --threads, --quiet, ... The

@@ -53,6 +53,8 @@ struct ListColumns {
   std::size_t reference = 0, distorted = 1;
   std::size_t metric = 2;  ///< kNoColumn when the header has none
   std::size_t count = 3;   ///< most fields a row may have
+  std::size_t ref_texture = std::numeric_limits<std::size_t>::max();  ///< header only
+  std::size_t dist_texture = std::numeric_limits<std::size_t>::max();
 };
 constexpr std::size_t kNoColumn = std::numeric_limits<std::size_t>::max();
 
@@ -61,7 +63,10 @@ constexpr std::size_t kNoColumn = std::numeric_limits<std::size_t>::max();
 bool is_list_header(const std::vector<std::string>& fields) {
   for (const std::string& f : fields) {
     const std::string l = lower_ascii(f);
-    if (l == "reference" || l == "distorted" || l == "metric") return true;
+    if (l == "reference" || l == "distorted" || l == "metric" || l == "ref_texture" ||
+        l == "dist_texture") {
+      return true;
+    }
   }
   return false;
 }
@@ -72,14 +77,16 @@ ListColumns list_columns(const std::vector<std::string>& fields, const std::stri
   ListColumns c{kNoColumn, kNoColumn, kNoColumn, fields.size()};
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const std::string l = lower_ascii(fields[i]);
-    std::size_t* slot = l == "reference"   ? &c.reference
-                        : l == "distorted" ? &c.distorted
-                        : l == "metric"    ? &c.metric
-                                           : nullptr;
+    std::size_t* slot = l == "reference"      ? &c.reference
+                        : l == "distorted"    ? &c.distorted
+                        : l == "metric"       ? &c.metric
+                        : l == "ref_texture"  ? &c.ref_texture
+                        : l == "dist_texture" ? &c.dist_texture
+                                              : nullptr;
     if (slot == nullptr) {
       throw FormatError(at + "unknown column \"" + fields[i] +
                         "\" in the header (a list's columns are reference, distorted and "
-                        "optionally metric, in any order)");
+                        "optionally metric, ref_texture, dist_texture, in any order)");
     }
     if (*slot != kNoColumn) throw FormatError(at + "column \"" + fields[i] + "\" appears twice");
     *slot = i;
@@ -95,7 +102,8 @@ ListColumns list_columns(const std::vector<std::string>& fields, const std::stri
 ListPair list_pair(const std::vector<std::string>& f, const ListColumns& c, const std::string& name,
                    std::size_t line_no) {
   const auto field = [&](std::size_t i) { return i < f.size() ? f[i] : std::string(); };
-  ListPair p{field(c.reference), field(c.distorted), field(c.metric)};
+  ListPair p{field(c.reference), field(c.distorted), field(c.metric), field(c.ref_texture),
+             field(c.dist_texture)};
   if (f.size() > c.count || p.reference.empty() || p.distorted.empty()) {
     throw FormatError(name + ": line " + std::to_string(line_no) + ": expected " +
                       (c.count == 3 && c.reference == 0 && c.distorted == 1

@@ -50,12 +50,15 @@ std::vector<T> select_shard(const std::vector<T>& rows, Shard shard, SizeOf size
 /// One row of a batch list, as written there (metric "auto" when the column is absent or empty).
 struct ListPair {
   std::string reference, distorted, metric;
+  /// Texture maps replacing the meshes' own (header columns ref_texture, dist_texture: as
+  /// --ref-texture / --dist-texture); empty = none.
+  std::string ref_texture, dist_texture;
 };
 
 /// The pairs of a batch list (the format `qm3d batch` reads: reference,distorted[,metric], blank
 /// lines and '#' comments skipped, fields trimmed, a UTF-8 BOM ignored). A first line naming any
-/// of the columns reference, distorted, metric (any case) is a header, and the rows are read by
-/// its names, in its order. `name` names the file in errors. Throws FormatError for a malformed
+/// of the columns reference, distorted, metric, ref_texture, dist_texture (any case) is a header,
+/// and the rows are read by its names, in its order. `name` names the file in errors. Throws FormatError for a malformed
 /// line, a header with another column name or a repeated one, or a list without pairs.
 std::vector<ListPair> parse_pair_list(const std::string& text, const std::string& name);
 

@@ -315,6 +315,8 @@ const ColoredCloud& Input::cloud() const {
   return s.cloud->cloud;
 }
 
+const ReadOptions& Input::read_options() const { return state_->read_options; }
+
 std::vector<std::string> Input::cloud_warnings() const {
   cloud();
   std::lock_guard<std::mutex> lock(state_->mutex);

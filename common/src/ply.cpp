@@ -287,6 +287,7 @@ struct VertexLayout {
   int x = -1, y = -1, z = -1;
   int red = -1, green = -1, blue = -1;
   int nx = -1, ny = -1, nz = -1;  // all three or none
+  int u = -1, v = -1;             // texture coordinates: both or none
 };
 
 int find_property(const Element& e, const std::string& name) {
@@ -318,6 +319,16 @@ VertexLayout vertex_layout(const Element& e, const std::string& name) {
     l.nx = nx;
     l.ny = ny;
     l.nz = nz;
+  }
+  // MeshLab and mmetric write texture_u / texture_v; s / t and u / v are the other names found.
+  const char* uv_names[3][2] = {{"texture_u", "texture_v"}, {"s", "t"}, {"u", "v"}};
+  for (const auto& n : uv_names) {
+    const int u = find_property(e, n[0]), v = find_property(e, n[1]);
+    if (u >= 0 && v >= 0) {
+      l.u = u;
+      l.v = v;
+      break;
+    }
   }
   return l;
 }
@@ -352,6 +363,7 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
     out.colors.resize(e.count);
   }
   if (l.nx >= 0) out.normals.resize(e.count);
+  if (l.u >= 0) out.uvs.resize(e.count);
   std::vector<double> values(e.properties.size());
   std::string where;
   for (std::uint64_t i = 0; i < e.count; ++i) {
@@ -377,6 +389,12 @@ void read_vertices(Cursor& cur, const Element& e, const std::string& name, Conte
       out.colors[i] = {values[l.red], values[l.green], values[l.blue]};
     }
     if (l.nx >= 0) out.normals[i] = {values[l.nx], values[l.ny], values[l.nz]};
+    if (l.u >= 0) {
+      out.uvs[i] = {values[l.u], values[l.v]};
+      if (!std::isfinite(out.uvs[i][0]) || !std::isfinite(out.uvs[i][1])) {
+        fail(name, where + " has a non-finite texture coordinate");
+      }
+    }
   }
 }
 
@@ -417,35 +435,62 @@ int face_list_property(const Element& e) {
   return -1;
 }
 
+int face_property(const Element& e, const std::string& name, bool list) {
+  for (std::size_t i = 0; i < e.properties.size(); ++i) {
+    if (e.properties[i].name == name && e.properties[i].is_list == list) return int(i);
+  }
+  return -1;
+}
+
+// One value of a face record: a vertex index of the face list, a texture coordinate of the
+// `texcoord` list, or something else (skipped).
+void read_face_value(Cursor& cur, const Property& p, int k, int list, int texcoord,
+                     const std::string& where, const std::string& name, Content& out) {
+  const double value = cur.value(p);
+  if (k == texcoord) {
+    if (!std::isfinite(value)) fail(name, where + " has a non-finite texture coordinate");
+    out.face_texcoords.push_back(value);
+  }
+  if (k != list) return;
+  if (value < 0 || value >= static_cast<double>(out.positions.size())) {
+    fail(name, where + " refers to vertex " + integer_text(value) + ", but there are " +
+                   std::to_string(out.positions.size()) + " vertices");
+  }
+  out.face_indices.push_back(static_cast<std::uint32_t>(value));
+}
+
 void read_faces(Cursor& cur, const Element& e, const std::string& name, Content& out) {
   const int list = face_list_property(e);
+  const int texcoord = face_property(e, "texcoord", true);
+  const int texnumber = face_property(e, "texnumber", false);
   out.face_offsets.assign(1, 0);
   out.face_offsets.reserve(e.count + 1);
-  const double num_vertices = static_cast<double>(out.positions.size());
   std::string where;
   for (std::uint64_t f = 0; f < e.count; ++f) {
     where = "face " + std::to_string(f);
     cur.begin_record(where);
+    double corners = 0, texcoords = 0;
     for (std::size_t k = 0; k < e.properties.size(); ++k) {
       const Property& p = e.properties[k];
       if (!p.is_list) {
-        cur.value(p);
+        const double value = cur.value(p);
+        if (static_cast<int>(k) == texnumber) out.face_texnumbers.push_back(std::int64_t(value));
         continue;
       }
       const double n = cur.value(p, true);
       if (n < 0) fail(name, where + ": negative list length");
-      for (double j = 0; j < n; ++j) {
-        const double idx = cur.value(p);
-        if (static_cast<int>(k) != list) continue;
-        if (idx < 0 || idx >= num_vertices) {
-          fail(name, where + " refers to vertex " + integer_text(idx) +
-                         ", but there are " + std::to_string(out.positions.size()) + " vertices");
-        }
-        out.face_indices.push_back(static_cast<std::uint32_t>(idx));
-      }
-      if (static_cast<int>(k) == list && n < 3) {
-        fail(name, where + " has " + std::to_string(static_cast<int>(n)) + " vertices (need 3)");
-      }
+      for (double j = 0; j < n; ++j)
+        read_face_value(cur, p, int(k), list, texcoord, where, name, out);
+      if (static_cast<int>(k) == list) corners = n;
+      if (static_cast<int>(k) == texcoord) texcoords = n;
+    }
+    if (list >= 0 && corners < 3) {
+      fail(name,
+           where + " has " + std::to_string(static_cast<int>(corners)) + " vertices (need 3)");
+    }
+    if (list >= 0 && texcoord >= 0 && texcoords != 2 * corners) {
+      fail(name, where + " has " + integer_text(texcoords) + " texcoord values for " +
+                     integer_text(corners) + " vertices (need u v for each)");
     }
     cur.end_record();
     if (list >= 0) out.face_offsets.push_back(static_cast<std::uint32_t>(out.face_indices.size()));
@@ -489,6 +534,14 @@ Header parse_header(const std::string& bytes, const std::string& name,
   std::getline(lines, line);  // magic
   while (std::getline(lines, line)) {
     const auto w = split_words(line);
+    if (w.size() >= 3 && w[0] == "comment" && w[1] == "TextureFile") {
+      const std::size_t at = line.find("TextureFile") + std::string("TextureFile").size();
+      std::string file = line.substr(at);
+      file.erase(0, file.find_first_not_of(" \t"));
+      file.erase(file.find_last_not_of(" \t\r") + 1);
+      h.texture_files.push_back(file);
+      continue;
+    }
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "format") {
       if (w.size() < 2) fail(name, "bad format line");
@@ -557,6 +610,7 @@ Content parse(const std::string& bytes, const std::string& name, AsciiFloat asci
               ColourScale colour_scale) {
   const Header h = parse_header(bytes, name);
   Content out;
+  out.texture_files = h.texture_files;
   Cursor cur(bytes, h.data_offset, h.format, ascii_float, name);
   bool have_vertices = false;
   for (const auto& e : h.elements) {

@@ -396,9 +396,15 @@ MeshFile read_mesh(const std::filesystem::path& path, const MeshReadOptions& opt
 MeshFile read_mesh(const std::filesystem::path& path, MeshFormat format,
                    const MeshReadOptions& options) {
   const std::string bytes = read_file_bytes(path);
-  // Colours of a textured OBJ come from its texture (texture.h); MSDM2 ignores colours.
-  if (format == MeshFormat::kObj && options.require_colors && obj_is_textured(bytes)) {
-    return parse_textured_obj(bytes, path).file;
+  // Colours of a textured mesh come from its texture (texture.h); MSDM2 ignores colours.
+  if (options.require_colors) {
+    ReadOptions read;
+    read.colour_scale = options.colour_scale;
+    std::vector<std::string> no_texture;
+    if (auto textured = read_textured_mesh(bytes, format, path, read, &no_texture)) {
+      return std::move(textured->file);
+    }
+    if (!no_texture.empty()) throw FormatError(no_texture.front());  // colours required
   }
   return parse_mesh(bytes, format, path.string(), options);
 }
@@ -446,14 +452,16 @@ ColoredCloud read_mesh_vertices(const std::filesystem::path& path, MeshFormat fo
 CloudData read_mesh_vertices_data(const std::filesystem::path& path, MeshFormat format,
                                   const ReadOptions& options) {
   const std::string bytes = read_file_bytes(path);
-  if (format == MeshFormat::kObj && obj_is_textured(bytes)) {
-    MeshFile file = parse_textured_obj(bytes, path).file;
+  std::vector<std::string> no_texture;
+  if (auto textured = read_textured_mesh(bytes, format, path, options, &no_texture)) {
+    MeshFile& file = textured->file;
     return CloudData{vertex_cloud(file.mesh), std::move(file.warnings), {}};
   }
   RawMesh raw = parse_raw(bytes, format, path.string(), options.colour_scale);
   if (raw.positions.empty()) fail(path.string(), "no vertices");
   CloudData out;
   out.warnings = std::move(raw.warnings);
+  out.warnings.insert(out.warnings.end(), no_texture.begin(), no_texture.end());
   out.cloud.colors = vertex_colors(raw, path.string(), options.colour_scale, out.warnings);
   out.cloud.positions = std::move(raw.positions);
   return out;

@@ -31,8 +31,13 @@ Float3 mm_texture_lookup(const TextureImage& img, float u, float v, bool bilinea
   const float fx = px - fx0, fy = py - fy0;  // glm::fract
   const Float3 tl = texel(img, x0, y0), tr = texel(img, x0 + 1, y0);
   const Float3 bl = texel(img, x0, y0 + 1), br = texel(img, x0 + 1, y0 + 1);
-  const auto mix = [](const Float3& a, const Float3& b, float t) {  // glm::mix: a + t (b - a)
-    return Float3{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+  // glm::mix(x, y, a) as GLM 0.9.9 computes it (detail/func_common.inl compute_mix_scalar):
+  // x (1 - a) + y a, in float. Not x + a (y - x), which rounds differently: on mmetric's textured
+  // basketball frame that form moved a few hundred pixels per view by one 8-bit level (IBSM
+  // colour MSEs off in the 6th digit, tests/render/ibsm_textured_reference_test.cpp).
+  const auto mix = [](const Float3& x, const Float3& y, float a) {
+    const float keep = 1.0f - a;
+    return Float3{x[0] * keep + y[0] * a, x[1] * keep + y[1] * a, x[2] * keep + y[2] * a};
   };
   return mix(mix(tl, tr, fx), mix(bl, br, fx), fy);
 }

@@ -5,13 +5,17 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
+#include <system_error>
 #include <tuple>
 
 #include "polygon_triangulation.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/ply.h"
 #include "text_lines.h"
 
 namespace qm3d::mesh {
@@ -143,33 +147,47 @@ std::map<std::string, Material> read_mtl(const std::filesystem::path& path) {
   return materials;
 }
 
-std::map<std::string, Material> read_materials(const ObjTexturing& t,
-                                               const std::filesystem::path& obj) {
-  std::map<std::string, Material> all;
-  for (const std::string& lib : t.mtllibs) {
-    auto materials = read_mtl(obj.parent_path() / lib);
-    all.insert(materials.begin(), materials.end());
-  }
-  return all;
-}
-
 TextureImage flat_texture(const Rgb& c) { return TextureImage{1, 1, {c}}; }
 
-// One texture per material the faces use; returns the material index of every polygon.
-std::vector<std::uint32_t> load_textures(const ObjTexturing& t, const std::filesystem::path& obj,
-                                         std::vector<TextureImage>& textures) {
-  const auto materials = read_materials(t, obj);
-  std::map<std::string, std::uint32_t> index;
-  std::vector<std::uint32_t> polygon_texture;
+// Why an OBJ's materials give no usable texture: no mtllib, a material file or texture map that
+// is not there, a face without a material, a material no mtllib defines. Empty when they are
+// usable (an image that is there but cannot be decoded is an error, found when it is read).
+std::string unusable_materials(const ObjTexturing& t, const std::filesystem::path& obj,
+                               std::map<std::string, Material>& materials) {
+  std::error_code ec;
+  if (t.mtllibs.empty()) return "no mtllib: the OBJ names no material file";
+  for (const std::string& lib : t.mtllibs) {
+    const std::filesystem::path mtl = obj.parent_path() / lib;
+    if (!std::filesystem::is_regular_file(mtl, ec)) {
+      return "its material file " + mtl.string() + " is not there";
+    }
+    auto read = read_mtl(mtl);
+    materials.insert(read.begin(), read.end());
+  }
   for (std::size_t p = 0; p < t.polygon_materials.size(); ++p) {
     const std::string& name = t.polygon_materials[p];
-    if (name.empty()) fail(obj.string(), "face " + std::to_string(p) + " has no material (usemtl)");
+    if (name.empty()) return "face " + std::to_string(p) + " has no material (usemtl)";
+    const auto m = materials.find(name);
+    if (m == materials.end()) return "material '" + name + "' is in no mtllib";
+    if (!m->second.map_kd.empty() && !std::filesystem::is_regular_file(m->second.map_kd, ec)) {
+      return "the texture map " + m->second.map_kd.string() + " of material '" + name +
+             "' is not there";
+    }
+  }
+  return {};
+}
+
+// One texture per material the faces use; returns the material index of every polygon.
+std::vector<std::uint32_t> load_textures(const ObjTexturing& t,
+                                         const std::map<std::string, Material>& materials,
+                                         std::vector<TextureImage>& textures) {
+  std::map<std::string, std::uint32_t> index;
+  std::vector<std::uint32_t> polygon_texture;
+  for (const std::string& name : t.polygon_materials) {
     auto [it, added] = index.emplace(name, static_cast<std::uint32_t>(textures.size()));
     if (added) {
-      const auto m = materials.find(name);
-      if (m == materials.end()) fail(obj.string(), "material '" + name + "' is in no mtllib");
-      textures.push_back(m->second.map_kd.empty() ? flat_texture(m->second.kd)
-                                                  : read_texture(m->second.map_kd));
+      const Material& m = materials.at(name);
+      textures.push_back(m.map_kd.empty() ? flat_texture(m.kd) : read_texture(m.map_kd));
     }
     polygon_texture.push_back(it->second);
   }
@@ -230,13 +248,21 @@ TextureImage read_texture(const std::filesystem::path& path) {
   const std::string bytes = read_file_bytes(path, kMaxTextureBytes);
   if (bytes.size() > static_cast<std::size_t>(INT_MAX)) fail(path.string(), "image too large");
   int w = 0, h = 0, channels = 0;
+  // The header first: every format (PNG, JPEG, BMP, TGA) under one texel limit before stb
+  // allocates the image (a BMP or TGA header can claim any size in a few bytes).
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  if (stbi_info_from_memory(data, static_cast<int>(bytes.size()), &w, &h, &channels) &&
+      static_cast<long long>(w) * h > kMaxTextureTexels) {
+    fail(path.string(), "texture image of " + std::to_string(w) + " x " + std::to_string(h) +
+                            " texels, more than the 16384 x 16384 qm3d reads");
+  }
   const std::unique_ptr<unsigned char, void (*)(void*)> pixels(
       stbi_load_from_memory(reinterpret_cast<const unsigned char*>(bytes.data()),
                             static_cast<int>(bytes.size()), &w, &h, &channels, kRgbChannels),
       stbi_image_free);
   if (!pixels) {
     fail(path.string(), std::string("cannot decode the texture image (") + stbi_failure_reason() +
-                            "); PNG and JPEG are supported");
+                            "); PNG, JPEG, BMP and TGA are supported");
   }
   TextureImage image{w, h, std::vector<Rgb>(static_cast<std::size_t>(w) * h)};
   for (std::size_t i = 0; i < image.texels.size(); ++i) {
@@ -262,32 +288,39 @@ Rgb sample_texture(const TextureImage& image, const Uv& uv) {
           mix(c00.b, c10.b, c01.b, c11.b)};
 }
 
-bool obj_is_textured(const std::string& obj_text) {
-  constexpr int kColoredVertexNumbers = 6;
+namespace {
+
+// What an OBJ holds that decides whether its colours come from a texture.
+struct ObjSurvey {
+  bool vertex_colours = false;  // a `v x y z r g b` line
+  bool uvs = false;             // a `vt` line
   bool mtllib = false;
+};
+
+ObjSurvey survey_obj(const std::string& obj_text) {
+  constexpr int kColoredVertexNumbers = 6;
+  ObjSurvey s;
   Statements lines(obj_text);
   std::string_view keyword, tok;
   Tokens tokens;
   while (lines.next(keyword, tokens)) {
-    if (keyword == "mtllib") mtllib = true;
-    if (keyword != "v") continue;
+    if (keyword == "mtllib") s.mtllib = true;
+    if (keyword == "vt") s.uvs = true;
+    if (keyword != "v" || s.vertex_colours) continue;
     int n = 0;
     while (tokens.next(tok)) ++n;
-    if (n >= kColoredVertexNumbers) return false;
+    s.vertex_colours = n >= kColoredVertexNumbers;
   }
-  return mtllib;
+  return s;
 }
 
-TexturedMesh read_textured_obj(const std::filesystem::path& path) {
-  return parse_textured_obj(read_file_bytes(path), path);
-}
-
-TexturedMesh parse_textured_obj(const std::string& text, const std::filesystem::path& path) {
+// The mesh, its corner UVs and its textures (one per polygon in `polygon_texture`).
+TexturedMesh assemble(const std::string& text, const std::filesystem::path& path,
+                      const ObjTexturing& t, const std::vector<std::uint32_t>& polygon_texture,
+                      std::vector<TextureImage> textures) {
   TexturedMesh out;
   out.file = parse_mesh(text, MeshFormat::kObj, path.string(), {/*require_colors=*/false});
-  const ObjTexturing t = parse_obj_texturing(text, path.string());
-  if (t.mtllibs.empty()) fail(path.string(), "no mtllib: the OBJ names no material file");
-  const std::vector<std::uint32_t> polygon_texture = load_textures(t, path, out.textures);
+  out.textures = std::move(textures);
   triangulate_uvs(t, polygon_texture, out);
   if (out.triangle_uvs.size() != out.file.mesh.triangles.size()) {
     fail(path.string(), "face count mismatch between geometry and texture coordinates");
@@ -297,25 +330,223 @@ TexturedMesh parse_textured_obj(const std::string& text, const std::filesystem::
   return out;
 }
 
+// An OBJ's textured mesh, or nothing with the reason in `why` (empty when the OBJ is simply not
+// textured). With a texture given (ReadOptions::texture), every face takes its colour from it
+// whatever its material. mmetric's rule for several materials is per material index (its
+// --inputMapA is a list: map i for the i-th material of the MTL); with one map, its sampler
+// (mmImage.h getImage) falls back to the first map for every material, its software renderer
+// instead renders a mesh with more materials than maps untextured. qm3d takes one map and
+// follows the sampler: the given map for every face, in every metric.
+std::optional<TexturedMesh> textured_obj(const std::string& text, const std::filesystem::path& path,
+                                         const ReadOptions& options, std::string& why) {
+  const ObjSurvey s = survey_obj(text);
+  if (!options.texture.empty()) {
+    if (!s.uvs) {
+      why = options.texture_option + " " + options.texture.string() +
+            " given, but the mesh has no texture coordinates (vt): the map is not used";
+      return std::nullopt;
+    }
+    const ObjTexturing t = parse_obj_texturing(text, path.string());
+    std::vector<TextureImage> textures{read_texture(options.texture)};
+    return assemble(text, path, t, std::vector<std::uint32_t>(t.polygon_materials.size(), 0),
+                    std::move(textures));
+  }
+  if (s.vertex_colours || (!s.mtllib && !s.uvs)) return std::nullopt;
+  const ObjTexturing t = parse_obj_texturing(text, path.string());
+  std::map<std::string, Material> materials;
+  why = unusable_materials(t, path, materials);
+  if (!why.empty()) return std::nullopt;
+  std::vector<TextureImage> textures;
+  const std::vector<std::uint32_t> polygon_texture = load_textures(t, materials, textures);
+  return assemble(text, path, t, polygon_texture, std::move(textures));
+}
+
+// ---- PLY -------------------------------------------------------------------------------------
+
+// Texture coordinates per vertex (both names of a pair) or per corner (face list `texcoord`).
+bool ply_header_has_uvs(const ply::Header& h) {
+  for (const ply::Element& e : h.elements) {
+    const auto has = [&e](const char* name, bool list) {
+      return std::any_of(e.properties.begin(), e.properties.end(), [&](const ply::Property& p) {
+        return p.name == name && p.is_list == list;
+      });
+    };
+    if (e.name == "face" && has("texcoord", true)) return true;
+    if (e.name != "vertex") continue;
+    if ((has("texture_u", false) && has("texture_v", false)) ||
+        (has("s", false) && has("t", false)) || (has("u", false) && has("v", false))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// A PLY's texture maps: the given one, else its `comment TextureFile` lines (relative to its
+// folder); empty with `why` set when one is not there.
+std::vector<std::filesystem::path> ply_maps(const ply::Content& c,
+                                            const std::filesystem::path& path,
+                                            const ReadOptions& options, std::string& why) {
+  if (!options.texture.empty()) return {options.texture};
+  std::vector<std::filesystem::path> maps;
+  std::error_code ec;
+  for (const std::string& name : c.texture_files) {
+    maps.push_back(path.parent_path() / name);
+    if (!std::filesystem::is_regular_file(maps.back(), ec)) {
+      why = "its texture map " + maps.back().string() + " (comment TextureFile) is not there";
+      return {};
+    }
+  }
+  if (maps.empty()) why = "it has texture coordinates but no `comment TextureFile` line";
+  return maps;
+}
+
+// Per-corner UVs (face `texcoord` lists) as ObjTexturing's corner list, or per-vertex UVs
+// (texture_u / texture_v, s / t, u / v) through the file's vertex numbers.
+void ply_uvs(const ply::Content& c, TexturedMesh& out) {
+  if (c.face_texcoords.empty()) {
+    out.uvs.assign(c.uvs.begin(), c.uvs.end());
+    for (const Triangle& t : out.file.mesh.triangles) {
+      out.triangle_uvs.push_back(
+          {out.file.file_vertex[t[0]], out.file.file_vertex[t[1]], out.file.file_vertex[t[2]]});
+    }
+    return;
+  }
+  for (std::size_t k = 0; k + 1 < c.face_texcoords.size(); k += 2) {
+    out.uvs.push_back({c.face_texcoords[k], c.face_texcoords[k + 1]});
+  }
+  for (std::size_t f = 0; f + 1 < c.face_offsets.size(); ++f) {
+    const std::uint32_t begin = c.face_offsets[f];
+    detail::triangulate_polygon(c.face_offsets[f + 1] - begin,
+                                [&](std::uint32_t a, std::uint32_t b, std::uint32_t d) {
+                                  out.triangle_uvs.push_back({begin + a, begin + b, begin + d});
+                                });
+  }
+}
+
+// Each triangle's texture: its face's `texnumber` (0 without one), as the polygons are
+// triangulated; `why` set when a number names no map.
+bool ply_triangle_textures(const ply::Content& c, std::size_t maps, TexturedMesh& out,
+                           std::string& why) {
+  for (std::size_t f = 0; f + 1 < c.face_offsets.size(); ++f) {
+    const std::int64_t n = c.face_texnumbers.empty() ? 0 : c.face_texnumbers[f];
+    if (n < 0 || static_cast<std::size_t>(n) >= maps) {
+      why = "face " + std::to_string(f) + " has texnumber " + std::to_string(n) + " but " +
+            std::to_string(maps) + " texture map(s)";
+      return false;
+    }
+    detail::triangulate_polygon(c.face_offsets[f + 1] - c.face_offsets[f],
+                                [&](std::uint32_t, std::uint32_t, std::uint32_t) {
+                                  out.triangle_texture.push_back(static_cast<std::uint32_t>(n));
+                                });
+  }
+  return true;
+}
+
+// A PLY mesh with texture coordinates (per vertex or per corner) takes its colours from its
+// `comment TextureFile` maps (or the given one), whatever vertex colours it also has. One map
+// per `texnumber` (MeshLab's multi-texture PLY), map 0 for a face without one; with a map given,
+// every face takes it (the rule of textured_obj).
+std::optional<TexturedMesh> textured_ply(const std::string& bytes,
+                                         const std::filesystem::path& path,
+                                         const ReadOptions& options, std::string& why) {
+  if (!ply_header_has_uvs(ply::parse_header(bytes, path.string()))) {
+    if (!options.texture.empty()) {
+      why = options.texture_option + " " + options.texture.string() +
+            " given, but the mesh has no texture coordinates: the map is not used";
+    }
+    return std::nullopt;
+  }
+  const ply::Content c = ply::parse(bytes, path.string());
+  if (c.uvs.empty() && c.face_texcoords.empty()) {
+    if (!options.texture.empty()) {
+      why = options.texture_option + " " + options.texture.string() +
+            " given, but the mesh has no texture coordinates: the map is not used";
+    }
+    return std::nullopt;
+  }
+  const std::vector<std::filesystem::path> maps = ply_maps(c, path, options, why);
+  if (maps.empty()) return std::nullopt;
+  TexturedMesh out;
+  out.file = parse_mesh(bytes, MeshFormat::kPly, path.string(), {/*require_colors=*/false});
+  ply_uvs(c, out);
+  const ply::Content* numbers = &c;
+  ply::Content given;  // a given map: every face takes it
+  if (!options.texture.empty()) {
+    given.face_offsets = c.face_offsets;
+    numbers = &given;
+  }
+  if (!ply_triangle_textures(*numbers, maps.size(), out, why)) return std::nullopt;
+  for (const auto& map : maps) out.textures.push_back(read_texture(map));
+  out.file.mesh.colors = vertex_texture_colors(out);
+  return out;
+}
+
+}  // namespace
+
+bool obj_is_textured(const std::string& obj_text) {
+  const ObjSurvey s = survey_obj(obj_text);
+  return s.mtllib && !s.vertex_colours;
+}
+
+TexturedMesh read_textured_obj(const std::filesystem::path& path) {
+  return parse_textured_obj(read_file_bytes(path), path);
+}
+
+TexturedMesh parse_textured_obj(const std::string& text, const std::filesystem::path& path) {
+  std::string why;
+  std::optional<TexturedMesh> m = textured_obj(text, path, {}, why);
+  if (!m) fail(path.string(), why.empty() ? "not a textured OBJ (no mtllib)" : why);
+  return std::move(*m);
+}
+
+bool may_be_textured(const std::filesystem::path& path, MeshFormat format,
+                     const ReadOptions& options) {
+  if (format == MeshFormat::kOff) return false;
+  if (format == MeshFormat::kObj || !options.texture.empty()) return true;
+  constexpr std::size_t kHeadBytes = 1 << 20;  // ply.cpp's kMaxHeaderBytes
+  std::ifstream in(path, std::ios::binary);
+  std::string head(kHeadBytes, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  try {
+    return ply_header_has_uvs(ply::parse_header(head, path.string(), std::uintmax_t(-1)));
+  } catch (const FormatError&) {
+    return true;  // the full read says what is wrong
+  }
+}
+
+std::optional<TexturedMesh> read_textured_mesh(const std::string& bytes, MeshFormat format,
+                                               const std::filesystem::path& path,
+                                               const ReadOptions& options,
+                                               std::vector<std::string>* warnings) {
+  std::string why;
+  std::optional<TexturedMesh> m;
+  if (format == MeshFormat::kObj) m = textured_obj(bytes, path, options, why);
+  if (format == MeshFormat::kPly) m = textured_ply(bytes, path, options, why);
+  if (!m && !why.empty() && warnings) {
+    warnings->push_back(path.string() + ": " + why + "; " + kReadWithoutTexture +
+                        (options.texture.empty()
+                             ? " (give its map with " + options.texture_option + ")"
+                             : std::string()));
+  }
+  return m;
+}
+
 std::filesystem::path obj_texture_file(const std::string& text, const std::filesystem::path& path) {
   const ObjTexturing t = parse_obj_texturing(text, path.string());
   if (t.mtllibs.empty())
     fail(path.string(), "no mtllib: the OBJ names no material file (untextured)");
-  const auto materials = read_materials(t, path);
+  std::map<std::string, Material> materials;
+  const std::string why = unusable_materials(t, path, materials);
+  if (!why.empty()) fail(path.string(), why);
   std::filesystem::path file;
-  for (std::size_t p = 0; p < t.polygon_materials.size(); ++p) {
-    const std::string& name = t.polygon_materials[p];
-    if (name.empty())
-      fail(path.string(), "face " + std::to_string(p) + " has no material (usemtl)");
-    const auto m = materials.find(name);
-    if (m == materials.end()) fail(path.string(), "material '" + name + "' is in no mtllib");
-    if (m->second.map_kd.empty()) {
-      fail(path.string(), "material '" + name + "' has no texture image (map_Kd)");
-    }
-    if (!file.empty() && file != m->second.map_kd) {
+  for (const std::string& name : t.polygon_materials) {
+    const Material& m = materials.at(name);  // unusable_materials checked that it is defined
+    if (m.map_kd.empty()) fail(path.string(), "material '" + name + "' has no texture image (map_Kd)");
+    if (!file.empty() && file != m.map_kd) {
       fail(path.string(), "its materials name several texture images (one is supported)");
     }
-    file = m->second.map_kd;
+    file = m.map_kd;
   }
   if (file.empty()) fail(path.string(), "no faces");
   return file;

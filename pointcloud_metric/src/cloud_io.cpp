@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "pcd_io.h"
 #include "qm3d/common/error.h"
@@ -31,19 +32,43 @@ CloudData read_ply(const std::filesystem::path& path, ColourScale colour_scale) 
   return out;
 }
 
+bool finite_point(const Vec3& p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+// PCL's rule for the points of an organised ("dense false") cloud with a NaN or infinite
+// coordinate (pcl::removeNaNFromPointCloud, filters/impl/filter.hpp in PCL 1.13: a point is
+// kept when x, y and z are all finite): they are invalid measurements (depth-camera pixels
+// without a return) and are dropped, in file order, with one warning giving their count. A cloud
+// with no valid point is an error.
+void drop_invalid_points(ColoredCloud& cloud, std::vector<std::string>& warnings,
+                         const std::filesystem::path& path) {
+  const std::size_t n = cloud.size();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!finite_point(cloud.positions[i])) continue;
+    cloud.positions[kept] = cloud.positions[i];
+    if (!cloud.colors.empty()) cloud.colors[kept] = cloud.colors[i];
+    ++kept;
+  }
+  if (kept == n) return;
+  if (kept == 0) {
+    throw FormatError(path.string() + ": all " + std::to_string(n) +
+                      " points have a NaN or infinite coordinate (no valid point)");
+  }
+  cloud.positions.resize(kept);
+  if (!cloud.colors.empty()) cloud.colors.resize(kept);
+  warnings.push_back(path.string() + ": " + std::to_string(n - kept) + " of " + std::to_string(n) +
+                     " points have a NaN or infinite coordinate (invalid measurements of an "
+                     "organised cloud): dropped, as pcl::removeNaNFromPointCloud does");
+}
+
 // PCD through qm3d's own reader (pcd_io.h): PCL's I/O library is not linked.
 CloudData read_pcd(const std::filesystem::path& path) {
   detail::PcdPoints points = detail::read_pcd_points(path);
   CloudData out;
   out.cloud = std::move(points.cloud);
-  for (std::size_t i = 0; i < out.cloud.size(); ++i) {
-    for (double v : out.cloud.positions[i]) {
-      if (!std::isfinite(v)) {
-        throw FormatError(path.string() + ": point " + std::to_string(i) +
-                          " has a non-finite coordinate (PCD 'dense false' clouds are not supported)");
-      }
-    }
-  }
+  drop_invalid_points(out.cloud, out.warnings, path);
   if (points.float32_coordinates) {
     if (auto w = float32_rounding_warning(out.cloud.positions, path.string())) {
       out.warnings.push_back(*w);

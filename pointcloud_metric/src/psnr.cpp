@@ -796,6 +796,72 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   return result;
 }
 
+// mmetric 1.1.7's compare --mode pcc on two clouds (mmCompare.cpp Compare::pcc; the rules in
+// shared/data/reference/mpeg/clouds_pcc/README.md): both clouds loaded with their normals and
+// duplicates merged as for meshes (normals averaged, not renormalised); peak = A's box diagonal
+// before merging (float32); D2 only when A has normals, the pass A -> B on B's own normals when B
+// has them (--normalCalcModificationEnable, its default), else transferred from A; ties 1e-20.
+MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
+                                  const std::vector<Vec3>& reference_normals,
+                                  const ColoredCloud& distorted,
+                                  const std::vector<Vec3>& distorted_normals,
+                                  const PsnrOptions& options, D2Normals d2_normals,
+                                  const std::string& reference_name,
+                                  const std::string& distorted_name) {
+  const auto start = std::chrono::steady_clock::now();
+  check_thread_count(options.threads);
+  check_peak(options.peak);
+  check_cloud(reference, reference_name, options.colour);
+  check_cloud(distorted, distorted_name, options.colour);
+  check_normals(reference_normals, reference.positions.size(), reference_name);
+  check_normals(distorted_normals, distorted.positions.size(), distorted_name);
+  ProgressSteps progress(options.progress, 4);
+  MetricResult result;
+  result.metric = "psnr";
+
+  progress.begin("loading");
+  const int dups = static_cast<int>(options.duplicates);
+  const bool weighted = options.tied == TiedNeighbours::kWeightedAverage;
+  const auto load = [&](const ColoredCloud& c, const std::vector<Vec3>& normals) {
+    return detail::load_mpeg_cloud(c.positions, options.colour ? &c.colors : nullptr, normals,
+                                   dups, weighted, true);
+  };
+  const MpegCloud a = load(reference, reference_normals);
+  const MpegCloud b = load(distorted, distorted_normals);
+  std::vector<Float3> a_points(reference.positions.size());
+  for (std::size_t i = 0; i < a_points.size(); ++i) {
+    for (int k = 0; k < 3; ++k) a_points[i][k] = static_cast<float>(reference.positions[i][k]);
+  }
+  if (options.inputs_done) options.inputs_done();
+  const float diagonal = static_cast<float>(box_diagonal(a_points));
+  if (!options.peak && !(diagonal > 0)) {
+    throw NumericError("psnr: " + reference_name + ": its box has no extent, so its diagonal "
+                       "gives no peak; give --peak");
+  }
+  const double peak = options.peak ? static_cast<float>(*options.peak) : diagonal;
+  if (a.normals.empty()) {
+    result.warnings.push_back("psnr: " + reference_name +
+                              " has no normals (nx, ny, nz): D2 is left out, as mmetric does");
+  }
+  nlohmann::json details = nlohmann::json::object();
+  details["conventions"] = {{"tool", "mmetric 1.1.7 compare --mode pcc"},
+                            {"tie_threshold", kMmetricTieThreshold},
+                            {"duplicate_normals", "averaged (unnormalised)"}};
+  details["peak_source"] = options.peak ? "given"
+                                        : "diagonal of the reference's box (mmetric's "
+                                          "--resolution 0)";
+  Conventions c;
+  c.tie_threshold = kMmetricTieThreshold;
+  c.d2_normals = d2_normals;
+  compare_loaded(a, b, a, peak, options, c, reference_name, progress, details, result);
+  result.details = std::move(details);
+  result.provenance.reproduces = kMmetricTool;
+  result.provenance.version = kVersion;
+  result.provenance.seconds = seconds_since(start);
+  progress.finish();
+  return result;
+}
+
 // ---- the registry entry -------------------------------------------------------------------------
 
 namespace {
@@ -883,6 +949,12 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
        "(the reference's normals transferred to the distorted points, pc_error; mmetric "
        "--normalCalcModificationEnable=false)",
        "auto", {"auto", "own", "transferred"}},
+      {"conventions",
+       "Whose rules: auto = pc_error's for two clouds, mmetric's for two meshes; mmetric = "
+       "mmetric's compare --mode pcc also for two clouds (normals of merged duplicates averaged, "
+       "D2 of the pass reference -> distorted on the distorted cloud's own normals, ties 1e-20, "
+       "peak = the reference's box diagonal); pc_error = pc_error's (two clouds only)",
+       "auto", {"auto", "pc_error", "mmetric"}},
       {"bilinear",
        "Two meshes: texture colours of a textured OBJ looked up bilinearly (mmetric --bilinear) "
        "instead of at the nearest texel",
@@ -905,6 +977,7 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
     const std::string normals = v.at("normals").get<std::string>();
     o.estimate_normals = normals == "estimate";
     const std::string d2_normals = v.at("d2_normals").get<std::string>();
+    const std::string conventions = v.at("conventions").get<std::string>();
     if (ref.is_mesh() != dist.is_mesh()) {
       const Input& mesh = ref.is_mesh() ? ref : dist;
       throw FormatError("psnr: " + mesh.name() + " is a mesh and the other input a cloud; psnr "
@@ -912,6 +985,10 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
                         "mesh first (qm3d sample --mode grid)");
     }
     if (ref.is_mesh() && dist.is_mesh()) {
+      if (conventions == "pc_error") {
+        throw std::invalid_argument("conventions: two meshes are sampled and compared as mmetric "
+                                    "does; pc_error applies to clouds");
+      }
       if (!normals.empty()) {
         throw std::invalid_argument("normals: two meshes are compared on their samples' face "
                                     "normals; --normals applies to clouds");
@@ -921,9 +998,22 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
       o.bilinear = v.at("bilinear").get<bool>();
       return compute_mesh_psnr(ref, dist, grid_sampler, o);
     }
+    if (conventions == "mmetric") {
+      if (!normals.empty()) {
+        throw std::invalid_argument("normals: with conventions mmetric each cloud's own normals "
+                                    "are used (as mm compare); --normals applies to pc_error's");
+      }
+      MetricResult r = compute_psnr_mmetric(
+          ref.cloud(), ref.cloud_normals(), dist.cloud(), dist.cloud_normals(), o,
+          d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn, ref.name(),
+          dist.name());
+      r.details["normals"] = ref.cloud_normals().empty() ? "none" : "each file's own";
+      return r;
+    }
     if (d2_normals == "own") {
-      throw std::invalid_argument("d2_normals: own applies to two meshes; clouds are compared as "
-                                  "pc_error does (the reference's normals transferred)");
+      throw std::invalid_argument("d2_normals: own applies to two meshes, or to two clouds with "
+                                  "--conventions mmetric; pc_error transfers the reference's "
+                                  "normals");
     }
     const ReferenceNormals given = normals.empty() || o.estimate_normals
                                        ? ReferenceNormals{ref.cloud_normals(), {}, {}}

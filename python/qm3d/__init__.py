@@ -107,10 +107,14 @@ def _colour_scale(value):
 class _Inputs:
     """The inputs of one call, built once per way a metric reads them (mesh or cloud)."""
 
-    def __init__(self, obj, argument, colour_scale="auto"):
+    def __init__(self, obj, argument, colour_scale="auto", texture=None):
         self._obj, self._argument, self._made = obj, argument, {}
         if isinstance(obj, (str, bytes, _os.PathLike)):
-            self._file = _qm3d.Input.from_file(_os.fsdecode(obj), _colour_scale(colour_scale))
+            keyword = {"reference": "ref_texture=", "distorted": "dist_texture="}.get(
+                argument, "texture=")
+            self._file = _qm3d.Input.from_file(
+                _os.fsdecode(obj), _colour_scale(colour_scale),
+                "" if texture is None else _os.fsdecode(texture), keyword)
             self.kind = self._file.kind
         else:
             p, c, f, name = _arrays_of(obj, argument)
@@ -251,7 +255,7 @@ def _installed_tables():
 _DEFAULT_TABLES = None if _os.environ.get("QM3D_DATA_DIR") else _installed_tables()
 
 _RUN_KEYWORDS = ("direction", "threads", "per_element", "data_dir", "weights", "model",
-                 "progress", "colour_scale")
+                 "progress", "colour_scale", "ref_texture", "dist_texture")
 
 
 def metrics():
@@ -314,7 +318,8 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
     known = {o["name"]: o for o in spec["options"]}
     options = {}
     run = dict(direction=None, threads=0, per_element=False, data_dir=None, weights=None,
-               model=None, progress=None, colour_scale="auto")
+               model=None, progress=None, colour_scale="auto", ref_texture=None,
+               dist_texture=None)
     for key, value in kwargs.items():
         if key in run:
             run[key] = value
@@ -343,8 +348,10 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
                else [_finite(f"{name}: weights", w) for w in run["weights"]])
     # Inputs made for this call alone are freed as soon as the metric holds its own copies.
     release = release or (ref_inputs is None and dist_inputs is None)
-    ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"])
-    dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"])
+    ref_inputs = ref_inputs or _Inputs(reference, "reference", run["colour_scale"],
+                                       run["ref_texture"])
+    dist_inputs = dist_inputs or _Inputs(distorted, "distorted", run["colour_scale"],
+                                         run["dist_texture"])
     reads = spec["reads"]
     if spec["reads_two_meshes_as_meshes"] and ref_inputs.kind == dist_inputs.kind == "mesh":
         reads = "mesh"  # the metric dispatches on the pair (dlab: meshes by projection)
@@ -382,6 +389,10 @@ _COMMON_DOC = """
             as numbers in files (OBJ, OFF, PLY float). auto = the reference's rule (0..255 when
             any value is above 1; warns when few values decide), unit = 0..1 (values above 1
             clamped), byte = 0..255.
+        ref_texture, dist_texture: a texture map (PNG, JPEG, BMP, TGA) replacing the
+            reference's / distorted mesh's own, as --ref-texture / --dist-texture (mmetric's
+            --inputMapA / --inputMapB): every face with texture coordinates takes its colour
+            from it.
 {model}        progress: optional callable(stage: str, fraction: float), told each stage.
 {options}
     Returns:
@@ -408,7 +419,9 @@ def _make_metric_function(spec):
                _inspect.Parameter("threads", kw, default=0),
                _inspect.Parameter("per_element", kw, default=False),
                _inspect.Parameter("data_dir", kw, default=None),
-               _inspect.Parameter("colour_scale", kw, default="auto")]
+               _inspect.Parameter("colour_scale", kw, default="auto"),
+               _inspect.Parameter("ref_texture", kw, default=None),
+               _inspect.Parameter("dist_texture", kw, default=None)]
     if spec["takes_model"]:
         params += [_inspect.Parameter("weights", kw, default=None),
                    _inspect.Parameter("model", kw, default=None)]
@@ -447,8 +460,8 @@ def compare(reference, distorted, **options):
                         "names its metric) or call the metric")
     _check_option_names("compare", options)
     scale = options.get("colour_scale", "auto")
-    ref_inputs = _Inputs(reference, "reference", scale)
-    dist_inputs = _Inputs(distorted, "distorted", scale)
+    ref_inputs = _Inputs(reference, "reference", scale, options.get("ref_texture"))
+    dist_inputs = _Inputs(distorted, "distorted", scale, options.get("dist_texture"))
     out = {}
     names = _qm3d.applicable(ref_inputs.any(), dist_inputs.any())
     for i, name in enumerate(names):
@@ -481,17 +494,19 @@ def _options_for(name, options):
 
 # ---- tools ---------------------------------------------------------------------------------
 
-def read_mesh(path, colour_scale="auto"):
-    """Reads a mesh file (OBJ, OFF, PLY; a textured OBJ gets its texture's colours) as qm3d's
-    metrics read it (colour_scale as for the metrics).
+def read_mesh(path, colour_scale="auto", texture=None):
+    """Reads a mesh file (OBJ, OFF, PLY; a textured mesh gets its texture's colours) as qm3d's
+    metrics read it (colour_scale as for the metrics; texture: a map replacing the file's own,
+    as --texture).
 
     Returns:
         dict: positions (V, 3) float64, colors (V, 3) float64 in 0-1 (None when the file has
         none), faces (F, 3) uint32, warnings (list of str: repairs made, e.g. vertices no face
         uses dropped).
     """
-    p, c, f, w = _qm3d.Input.from_file(_os.fsdecode(path),
-                                       _colour_scale(colour_scale)).mesh_arrays()
+    p, c, f, w = _qm3d.Input.from_file(
+        _os.fsdecode(path), _colour_scale(colour_scale),
+        "" if texture is None else _os.fsdecode(texture), "texture=").mesh_arrays()
     return {"positions": p, "colors": c, "faces": f, "warnings": list(w)}
 
 
@@ -509,7 +524,7 @@ def read_cloud(path, colour_scale="auto"):
 
 
 def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=1024, box=None,
-           all_axes=False, bilinear=False):
+           all_axes=False, bilinear=False, texture=None):
     """Samples a mesh's surface into a coloured point cloud, as ``qm3d sample`` does.
 
     Args:
@@ -526,6 +541,8 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
             --minPos / --maxPos); None = the mesh's own vertex box.
         all_axes: grid mode: rays along all three axes (mmetric without --useNormal).
         bilinear: grid mode: bilinear texture lookups (mmetric --bilinear).
+        texture: a texture map replacing the mesh file's own, as --texture (mmetric's
+            --inputMap): every face with texture coordinates takes its colour from it.
 
     Returns:
         dict: positions (N, 3) float64, colors (N, 3) float64 in 0-1 (grid mode: the float32
@@ -535,7 +552,7 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
     if mode == "grid":
         if points is not None or density is not None:
             raise ValueError("sample: points and density apply to mode='random'")
-        inputs = _Inputs(mesh, "mesh")
+        inputs = _Inputs(mesh, "mesh", texture=texture)
         p, n, c, w, degenerate, step = _qm3d.sample_grid(
             inputs.get("mesh"), int(grid_size), None if box is None else [float(v) for v in box],
             bool(all_axes), bool(bilinear))
@@ -545,14 +562,14 @@ def sample(mesh, points=None, density=None, seed=1, mode="random", grid_size=102
         raise ValueError(f"sample: mode must be 'random' or 'grid', got {mode!r}")
     if (points is None) == (density is None):
         raise ValueError("sample: give exactly one of points and density")
-    inputs = _Inputs(mesh, "mesh")
+    inputs = _Inputs(mesh, "mesh", texture=texture)
     p, c = _qm3d.sample(inputs.get("mesh"), int(points or 0), float(density or 0), int(seed))
     return {"positions": p, "colors": c}
 
 
 def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="fibonacci",
            culling=True, lighting="none", splat_size=0.0, splat_shape="disc", frame=None,
-           threads=0, colour_scale="auto"):
+           threads=0, colour_scale="auto", texture=None):
     """Renders an object as ``qm3d ibsm`` sees it: orthographic views from the same cameras,
     with the same rasteriser (mmetric's sw_raster for meshes, splats for clouds).
 
@@ -568,6 +585,7 @@ def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="
             ibsm result to get its images exactly; None = the object's own (its box's centre and
             half diagonal + 1 %).
         threads: OpenMP threads (0 = all cores); the images do not depend on it.
+        texture: a texture map replacing the mesh file's own (as ``ibsm``'s ``ref_texture``).
 
     Returns:
         dict: ``views``, a list (one per view) of dicts with ``direction`` (3 floats, from the
@@ -584,7 +602,7 @@ def render(obj, *, views=16, resolution=2048, rotation=(0.0, 0.0, 0.0), layout="
     options = {k: _option_value(spec, by_name[k], v) for k, v in given.items()}
     if frame is not None:
         frame = [_finite("frame", v) for v in frame]
-    inputs = _Inputs(obj, "obj", colour_scale)
+    inputs = _Inputs(obj, "obj", colour_scale, texture)
     out, centre, radius = _qm3d.render_views(inputs.any(), _json.dumps(options),
                                              frame, _thread_count(threads))
     result = []

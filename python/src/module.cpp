@@ -315,12 +315,16 @@ PYBIND11_MODULE(_qm3d, m) {
   py::class_<Input>(m, "Input")
       .def_static(
           "from_file",
-          [](const std::string& path, const std::string& colour_scale) {
+          [](const std::string& path, const std::string& colour_scale, const std::string& texture,
+             const std::string& texture_option) {
             ReadOptions o;
             o.colour_scale = parse_colour_scale(colour_scale);  // ValueError otherwise
+            o.texture = texture;
+            o.texture_option = texture_option;
             return registry().read(path, o);
           },
-          py::arg("path"), py::arg("colour_scale") = "auto")
+          py::arg("path"), py::arg("colour_scale") = "auto", py::arg("texture") = "",
+          py::arg("texture_option") = "ref_texture= / dist_texture=")
       .def_static("from_arrays", &input_from_arrays, py::arg("positions"), py::arg("colors"),
                   py::arg("faces"), py::arg("name"), py::arg("as_mesh"))
       .def_property_readonly("name", &Input::name)

@@ -303,10 +303,14 @@ namespace qm3d::render {
 
 RenderModel model_of(const Input& input, const SplatOptions& splats) {
   try {
-    if (input.is_mesh() && !input.path().empty() && input.format() == FileFormat::kObj) {
-      const std::string bytes = read_file_bytes(input.path());
-      if (mesh::obj_is_textured(bytes)) {
-        return textured_mesh_model(mesh::parse_textured_obj(bytes, input.path()));
+    if (input.is_mesh() && !input.path().empty() && input.format() != FileFormat::kPcd) {
+      const mesh::MeshFormat f = input.format() == FileFormat::kObj   ? mesh::MeshFormat::kObj
+                                 : input.format() == FileFormat::kOff ? mesh::MeshFormat::kOff
+                                                                      : mesh::MeshFormat::kPly;
+      if (mesh::may_be_textured(input.path(), f, input.read_options())) {
+        auto textured = mesh::read_textured_mesh(read_file_bytes(input.path()), f, input.path(),
+                                                 input.read_options());
+        if (textured) return textured_mesh_model(*textured);
       }
     }
     if (input.is_mesh()) {

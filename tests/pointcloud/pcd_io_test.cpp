@@ -17,6 +17,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <pcl/filters/impl/filter.hpp>  // removeNaNFromPointCloud (pcl_filters is not linked)
 #include <random>
 #include <string>
 #include <vector>
@@ -274,6 +275,33 @@ TEST(PcdReaderVsPcl, DoubleCoordinatesAndOtherFieldsAroundThemInEveryEncoding) {
   }
 }
 
+// The tool's cloud against PCL's own pipeline: pcl::io::loadPCDFile, then
+// pcl::removeNaNFromPointCloud. The same points in the same order, one warning giving the count.
+void expect_nan_points_dropped_as_pcl(const std::filesystem::path& path, std::size_t dropped) {
+  SCOPED_TRACE(path.string());
+  pcl::PointCloud<pcl::PointXYZRGB> loaded, filtered;
+  ASSERT_EQ(pcl::io::loadPCDFile(path.string(), loaded), 0);
+  EXPECT_FALSE(loaded.is_dense);  // what makes removeNaNFromPointCloud look at the points
+  pcl::Indices kept;
+  pcl::removeNaNFromPointCloud(loaded, filtered, kept);
+  const CloudData ours = read_cloud_data(path, CloudFormat::kPcd);
+  ASSERT_EQ(ours.cloud.size(), filtered.size());
+  EXPECT_EQ(loaded.size() - filtered.size(), dropped);
+  for (std::size_t i = 0; i < filtered.size(); ++i) {
+    const auto& p = filtered[i];
+    ASSERT_EQ(ours.cloud.positions[i], (Vec3{p.x, p.y, p.z})) << i;
+    ASSERT_EQ(ours.cloud.colors[i].r, p.r / 255.0) << i;
+    ASSERT_EQ(ours.cloud.colors[i].g, p.g / 255.0) << i;
+    ASSERT_EQ(ours.cloud.colors[i].b, p.b / 255.0) << i;
+  }
+  ASSERT_EQ(ours.warnings.size(), 1u);
+  EXPECT_EQ(ours.warnings[0], path.string() + ": " + std::to_string(dropped) + " of " +
+                                  std::to_string(loaded.size()) +
+                                  " points have a NaN or infinite coordinate (invalid "
+                                  "measurements of an organised cloud): dropped, as "
+                                  "pcl::removeNaNFromPointCloud does");
+}
+
 pcl::PointCloud<pcl::PointXYZRGB> organised_with_nans() {
   pcl::PointCloud<pcl::PointXYZRGB> c = random_xyzrgb(16 * 8, 3);
   c.width = 16;
@@ -293,15 +321,24 @@ TEST(PcdReaderVsPcl, OrganisedCloudWithNanPointsInEveryEncoding) {
     expect_same_as_pcl(path);
     EXPECT_EQ(read_pcd_points(path).cloud.size(), 128u);
     EXPECT_TRUE(std::isnan(read_pcd_points(path).cloud.positions[5][0]));
-    // The tool refuses them, naming the first one.
+    expect_nan_points_dropped_as_pcl(path, 4);
+  }
+}
+
+// A cloud of NaN points only: an error naming the file (PCL would leave an empty cloud).
+TEST(PcdReaderVsPcl, AllNanCloudIsAnErrorNamingTheFile) {
+  const auto dir = temp_dir("pcd_all_nan");
+  pcl::PointCloud<pcl::PointXYZRGB> c = organised_with_nans();
+  for (auto& p : c) p.x = std::numeric_limits<float>::quiet_NaN();
+  for (const Encoding e : kEncodings) {
+    const auto path = write_pcl(dir / (std::string(name_of(e)) + ".pcd"), c, e);
     try {
-      read_cloud(path);
+      read_cloud_data(path, CloudFormat::kPcd);
       ADD_FAILURE() << "no error for " << path;
-    } catch (const FormatError& e) {
-      EXPECT_EQ(std::string(e.what()),
-                path.string() +
-                    ": point 5 has a non-finite coordinate (PCD 'dense false' clouds "
-                    "are not supported)");
+    } catch (const FormatError& err) {
+      EXPECT_EQ(
+          std::string(err.what()),
+          path.string() + ": all 128 points have a NaN or infinite coordinate (no valid point)");
     }
   }
 }

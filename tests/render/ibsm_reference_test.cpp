@@ -4,7 +4,10 @@
 // out (--no-ssim): mmetric has none, and it is the slowest part.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <iostream>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -67,6 +70,56 @@ const std::map<std::string, std::string> kColumns = {
     {"GEO_MSE", "geo_mse"}, {"R_PSNR", "r_psnr"}, {"G_PSNR", "g_psnr"}, {"B_PSNR", "b_psnr"},
     {"RGB_PSNR", "rgb_psnr"}, {"Y_PSNR", "y_psnr"}, {"U_PSNR", "u_psnr"}, {"V_PSNR", "v_psnr"},
     {"YUV_PSNR", "yuv_psnr"}, {"GEO_PSNR", "geo_psnr"}};
+
+/// The maps of mmetric's --inputMapA / --inputMapB in `args` ("" when absent).
+std::pair<std::string, std::string> maps_of(const std::string& args) {
+  std::pair<std::string, std::string> maps;
+  std::stringstream s(args);
+  for (std::string word; s >> word;) {
+    if (word == "--inputMapA") s >> maps.first;
+    if (word == "--inputMapB") s >> maps.second;
+  }
+  return maps;
+}
+
+// mmetric on a real textured frame (shared/data/reference/mpeg/textured/, README there), its maps
+// given as --ref-texture / --dist-texture: every printed value within 1e-8 relative (mm prints
+// 9 digits). The texel lookups follow mmetric's bilinear rule to the float operation
+// (mesh_metric/src/mm_texture.cpp).
+TEST(IbsmReference, TexturedFrameWithMapsGivenOnTheCommandLine) {
+  constexpr double kTexturedTolerance = 1e-8;
+  const std::vector<test::PcErrorCase> rows =
+      test::mpeg_cases("textured/mm_ibsm_textured_reference.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  const std::filesystem::path dir = test::reference_dir() / "mpeg" / "textured";
+  double worst = 0;
+  RunOptions run;
+  run.threads = 2;
+  for (const test::PcErrorCase& c : rows) {
+    const std::map<std::string, std::string>& row = c.column;
+    SCOPED_TRACE(row.at("case"));
+    const auto [map_a, map_b] = maps_of(row.at("args"));
+    ReadOptions ra, rb;
+    ra.texture = dir / map_a;
+    rb.texture = dir / map_b;
+    const Input a = registry().read(dir / row.at("mesh_a"), ra);
+    const Input b = registry().read(dir / row.at("mesh_b"), rb);
+    const MetricResult r =
+        run_metric(registry().get("ibsm"), a, b, run, options_of(row.at("args")));
+    for (const auto& [column, name] : kColumns) {
+      const auto got = find_value(r.values, name);
+      ASSERT_TRUE(got) << name;
+      const double d = deviation(*got, std::stod(row.at(column)));
+      EXPECT_LE(d, kTexturedTolerance)
+          << column << ": got " << *got << ", mmetric " << row.at(column);
+      worst = std::max(worst, d);
+    }
+    const double box =
+        deviation(r.details.at("box_ratio").get<double>(), std::stod(row.at("BoxRatio")));
+    EXPECT_LE(box, kTexturedTolerance);
+  }
+  std::cout << "[ibsm textured reference] worst relative deviation " << worst << "\n";
+}
 
 TEST(IbsmReference, EveryValueOfEveryCase) {
   const std::vector<test::PcErrorCase> rows = test::mpeg_cases("mm_ibsm_reference.csv");

@@ -82,6 +82,8 @@ class Input {
   Kind kind() const;
   bool is_mesh() const { return kind() == Kind::kMesh; }
   FileFormat format() const;  ///< the file's format (kPly for data in memory)
+  /// How the file is read (defaults for data in memory): colour scale, texture map override.
+  const ReadOptions& read_options() const;
 
   /// The mesh. FormatError naming the input when it is a cloud.
   const MeshData& mesh() const;

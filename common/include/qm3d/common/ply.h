@@ -8,6 +8,7 @@
 // elements than the file can hold must fail before anything is allocated.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -38,6 +39,9 @@ struct Element {
 
 struct Header {
   Format format = Format::kAscii;
+  /// The texture maps of `comment TextureFile NAME` lines (MeshLab's, MEPP2's and mmetric's
+  /// convention), in order; NAME is the rest of the line, relative to the PLY's folder.
+  std::vector<std::string> texture_files;
   std::vector<Element> elements;
   std::size_t data_offset = 0;  ///< byte offset of the first data byte
 };
@@ -60,6 +64,15 @@ struct Content {
   /// face_indices[face_offsets[f] .. face_offsets[f + 1]). face_offsets has #F + 1 entries.
   std::vector<std::uint32_t> face_offsets{0};
   std::vector<std::uint32_t> face_indices;
+  /// Texture coordinates (u, v), one per vertex, from the vertex properties texture_u /
+  /// texture_v, s / t or u / v (the first pair present); empty when there are none.
+  std::vector<std::array<double, 2>> uvs;
+  /// Per-corner texture coordinates from the face list property `texcoord` (u0 v0 u1 v1 ... for
+  /// the face's corners, in face_indices order): 2 values per corner; empty when there are none.
+  std::vector<double> face_texcoords;
+  /// Each face's `texnumber` (its index into texture_files); empty when there is none.
+  std::vector<std::int64_t> face_texnumbers;
+  std::vector<std::string> texture_files;  ///< Header::texture_files
   /// What the reader could not keep silent: a colour scale chosen on thin evidence, coordinates
   /// rounded to float32 against their spacing (reading.h). Each line names the file.
   std::vector<std::string> warnings;

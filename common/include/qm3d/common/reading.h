@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -31,6 +32,13 @@ const char* colour_scale_name(ColourScale scale);
 /// How a file is read, beyond its content.
 struct ReadOptions {
   ColourScale colour_scale = ColourScale::kAuto;
+  /// A texture map that replaces the map of every material of a textured mesh (mmetric's
+  /// --inputMapA / --inputMapB; qm3d's --ref-texture / --dist-texture): every face with texture
+  /// coordinates takes its colour from it. Empty: the file's own materials.
+  std::filesystem::path texture;
+  /// How the user gives `texture` (named in the warning about a mesh with texture coordinates
+  /// but no usable texture).
+  std::string texture_option = "--ref-texture / --dist-texture";
 };
 
 /// A cloud as read from a file with its reader's warnings (what Input keeps).

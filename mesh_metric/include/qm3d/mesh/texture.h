@@ -1,6 +1,7 @@
-// Textured OBJ meshes (OBJ + MTL + PNG/JPEG texture): texture colours transferred to the
-// vertices, as the CMDM paper scored textured meshes (seed document 1.3.4), and kept with their
-// UVs for surface sampling.
+// Textured meshes (OBJ + MTL + texture map; PLY with texture coordinates and `comment
+// TextureFile`; maps in PNG, JPEG, BMP or TGA): texture colours transferred to the vertices, as the
+// CMDM paper scored textured meshes (seed document 1.3.4), and kept with their UVs for surface
+// sampling.
 //
 // Conventions: UV (0, 0) is the bottom-left corner of the image, (1, 1) the top-right (OBJ);
 // texel (i, j) is centred at ((i + 0.5) / W, 1 - (j + 0.5) / H); lookups are bilinear between
@@ -14,10 +15,12 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "qm3d/common/grid_samples.h"
+#include "qm3d/common/reading.h"
 #include "qm3d/common/types.h"
 #include "qm3d/mesh/mesh_io.h"
 
@@ -33,10 +36,13 @@ struct TextureImage {
   std::vector<Rgb> texels;  ///< #width*#height
 };
 
-/// Reads a PNG or JPEG image (8-bit, any channel count; alpha ignored, grey expanded).
-/// Throws InputError when the file is missing, FormatError naming it when the image cannot be
-/// decoded.
+/// Reads a PNG, JPEG, BMP or TGA image (8-bit, any channel count; alpha ignored, grey
+/// expanded), through stb_image, with the same limits for every format: at most
+/// kMaxTextureBytes of file (file_io.h) and kMaxTextureTexels texels. Throws InputError when
+/// the file is missing, FormatError naming it when the image cannot be decoded or is too large.
 TextureImage read_texture(const std::filesystem::path& path);
+/// 16384 x 16384: the largest texture of common GPUs, an image of 6 GiB once decoded here.
+inline constexpr long long kMaxTextureTexels = 16384LL * 16384LL;
 
 /// Bilinear, wrapping lookup of `image` at `uv` (conventions above).
 Rgb sample_texture(const TextureImage& image, const Uv& uv);
@@ -76,8 +82,34 @@ TexturedMesh parse_textured_obj(const std::string& obj_text, const std::filesyst
 /// The one texture image the faces of an OBJ use (the `map_Kd` of their materials, as
 /// read_textured_obj finds it), for metrics that take a single texture per mesh (GeodesicPSIM).
 /// FormatError naming the file at fault: no mtllib, a face without UV or material, a material
-/// without `map_Kd`, materials naming different images; InputError for a missing MTL.
+/// without `map_Kd`, materials naming different images, a missing MTL or map.
 std::filesystem::path obj_texture_file(const std::string& obj_text,
                                        const std::filesystem::path& path);
+
+/// The textured mesh of a mesh file (`bytes`, its content; `path` locates its maps) whose
+/// colours come from texture maps, or nothing when they do not:
+/// - OBJ: an `mtllib` and no vertex colours (obj_is_textured), or texture coordinates (`vt`);
+/// - PLY: texture coordinates per vertex (texture_u / texture_v, s / t or u / v) or per corner
+///   (face list `texcoord`), maps from `comment TextureFile NAME` lines (relative to the PLY;
+///   a face's `texnumber` picks one, 0 without it).
+/// `options.texture`, when given, replaces every map: every face with texture coordinates takes
+/// its colour from it (mmetric's --inputMapA / --inputMapB with one map).
+/// A mesh with texture coordinates but no usable texture (no mtllib or TextureFile, a material
+/// or map file that is not there, an undefined material) gives nothing and one warning naming
+/// the file, the reason and options.texture_option, added to `warnings` (when not null).
+/// Throws FormatError / InputError naming the file for an image that cannot be decoded, a given
+/// map that is not there, or malformed texture coordinates.
+/// The words of read_textured_mesh's warning that a mesh is read without its texture.
+inline constexpr const char* kReadWithoutTexture = "read without its texture";
+
+/// False when the file certainly is not a textured mesh (an OFF; a PLY whose header declares no
+/// texture coordinates, with no map given): read_textured_mesh need not read it.
+bool may_be_textured(const std::filesystem::path& path, MeshFormat format,
+                     const ReadOptions& options);
+
+std::optional<TexturedMesh> read_textured_mesh(const std::string& bytes, MeshFormat format,
+                                               const std::filesystem::path& path,
+                                               const ReadOptions& options,
+                                               std::vector<std::string>* warnings = nullptr);
 
 }  // namespace qm3d::mesh

@@ -19,8 +19,10 @@ namespace qm3d::pointcloud {
 ///   (other fields may have any COUNT: a field of COUNT n takes n ASCII columns). An ASCII line
 ///   with a value too many or too few, data beyond POINTS or fewer points than it, a binary file
 ///   whose size is not POINTS records, compressed data whose sizes disagree with POINTS or whose
-///   LZF stream is corrupt, and a point with a non-finite coordinate (the NaN points of an
-///   organised cloud) are FormatErrors naming the file (and the line or point).
+///   LZF stream is corrupt are FormatErrors naming the file (and the line). Points with a NaN or
+///   infinite coordinate (the invalid pixels of an organised, `is_dense false` cloud) are
+///   dropped as pcl::removeNaNFromPointCloud drops them, with one warning giving their count
+///   (read_cloud_data); a cloud with no valid point is a FormatError naming the file.
 ///
 /// Colours are returned in [0, 1] at double precision; an 8-bit channel u becomes u / 255.0,
 /// exactly as MEPP-team/PCQM converts its colours.
@@ -35,7 +37,6 @@ namespace qm3d::pointcloud {
 /// are dropped here.
 ///
 /// \bug OBJ and OFF meshes are not read here (the mesh reader will provide their vertices).
-/// \bug Organised PCD clouds with NaN points are refused rather than read without them.
 ColoredCloud read_cloud(const std::filesystem::path& path);
 
 enum class CloudFormat { kPly, kPcd };

@@ -129,6 +129,22 @@ struct MeshPsnrOptions : PsnrOptions {
 constexpr double kMmetricTieThreshold = 1e-20;
 constexpr double kPcErrorTieThreshold = 1e-8;
 
+/// mmetric 1.1.7's `compare --mode pcc` on two clouds with their own normals (one per point, or
+/// none): its duplicate merging with averaged (unnormalised) normals, D2 only when the reference
+/// has normals, the pass reference -> distorted on the distorted cloud's own normals (d2_normals
+/// kOwn, mmetric's default; kTransferred or a distorted cloud without normals: transferred from
+/// the reference, --normalCalcModificationEnable=false), ties 1e-20, unset peak = the diagonal
+/// of the reference's box before merging (float32, mmetric's --resolution 0). Values as
+/// compute_psnr's (shared/data/reference/mpeg/clouds_pcc/).
+MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
+                                  const std::vector<Vec3>& reference_normals,
+                                  const ColoredCloud& distorted,
+                                  const std::vector<Vec3>& distorted_normals,
+                                  const PsnrOptions& options = {},
+                                  D2Normals d2_normals = D2Normals::kOwn,
+                                  const std::string& reference_name = "reference",
+                                  const std::string& distorted_name = "distorted");
+
 /// mmetric's values of two meshes (MeshPsnrOptions). Unset peak = mmetric's --resolution 0: the
 /// diagonal of the reference's sampled cloud's box (float32). A mesh without vertex colours
 /// gives geometry values only (with a warning). Details: how the meshes were sampled (grid
