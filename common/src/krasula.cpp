@@ -66,98 +66,92 @@ double delong_z(const std::vector<double>& aucs, const std::vector<double>& cov,
 
 // ---- one metric's sorted values and the structural components counted in them -------------
 
-// Sorted values (all >= 0) with a bucket index, so that counting the values below x reads a
-// few cache lines instead of the ~25 of a binary search over the whole array. The buckets split
-// the bit patterns of the values (monotonic in the value for doubles >= 0: an exponent and a
-// mantissa, so the buckets are about logarithmic across binades and linear within one); the
-// bucket of x bounds its lower and upper bounds exactly, whatever the values' distribution.
-constexpr std::size_t kBucketValues = 4;  // values per bucket on average
-
-class SortedArray {
+// Counting in a sorted array at ascending query values: each search starts where the last one
+// ended and gallops forward (exponential, then binary search), so that a block of queries,
+// sorted, sweeps the array once, reading it nearly in order instead of ~25 cache lines a query.
+class Sweep {
  public:
-  std::vector<double> values;  // filled, then index() sorts them
-
-  void index() {
-    std::sort(values.begin(), values.end());
-    if (values.empty()) return;
-    lo_ = bits(values.front());
-    const std::uint64_t span = bits(values.back()) - lo_;
-    const std::size_t wanted = std::max<std::size_t>(1, values.size() / kBucketValues);
-    while ((span >> shift_) >= wanted) ++shift_;
-    start_.assign(static_cast<std::size_t>(span >> shift_) + 2, 0);
-    std::size_t b = 0;
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      const std::size_t of = bucket(values[i]);
-      while (b < of) start_[++b] = i;  // the buckets up to this value's begin here
-    }
-    while (b + 1 < start_.size()) start_[++b] = values.size();
-  }
-  std::size_t size() const { return values.size(); }
-  // {#{values < x}, #{values == x}} for x >= 0.
-  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
-    if (values.empty() || x < values.front()) return {0, 0};
-    if (x > values.back()) return {values.size(), 0};
-    const std::size_t b = bucket(x);
-    const auto first = values.begin() + static_cast<std::ptrdiff_t>(start_[b]);
-    const auto last = values.begin() + static_cast<std::ptrdiff_t>(start_[b + 1]);
-    const auto [less, not_above] = std::equal_range(first, last, x);
-    return {static_cast<std::uint64_t>(less - values.begin()),
-            static_cast<std::uint64_t>(not_above - less)};
-  }
-  // 2 #{values < x} + #{values == x}: twice the Mann-Whitney count of x against the values
-  // (ties count half), an exact integer.
-  std::uint64_t twice_below(double x) const {
-    const auto [less, equal] = below_and_equal(x);
-    return 2 * less + equal;
+  explicit Sweep(const std::vector<double>& sorted) : v_(sorted) {}
+  // {#{values < x}, #{values == x}}; x at least the previous query's.
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) {
+    at_ = gallop(at_, [x](double v) { return v < x; });
+    const std::size_t not_above = gallop(at_, [x](double v) { return v <= x; });
+    return {at_, not_above - at_};
   }
 
  private:
-  static std::uint64_t bits(double x) {
-    std::uint64_t u;
-    std::memcpy(&u, &x, sizeof u);
-    return u;
+  // The first index from `from` on whose value fails `before` (which holds for a prefix).
+  template <class Before>
+  std::size_t gallop(std::size_t from, Before before) const {
+    std::size_t lo = from, hi = from, step = 1;
+    while (hi < v_.size() && before(v_[hi])) {
+      lo = hi + 1;
+      hi += step;
+      step *= 2;
+    }
+    hi = std::min(hi, v_.size());
+    return static_cast<std::size_t>(
+        std::partition_point(v_.begin() + static_cast<std::ptrdiff_t>(lo),
+                             v_.begin() + static_cast<std::ptrdiff_t>(hi), before) -
+        v_.begin());
   }
-  std::size_t bucket(double x) const { return static_cast<std::size_t>((bits(x) - lo_) >> shift_); }
-  std::uint64_t lo_ = 0;
-  unsigned shift_ = 0;
-  std::vector<std::size_t> start_;  // first value of each bucket, then the count
+  const std::vector<double>& v_;
+  std::size_t at_ = 0;
 };
 
 // One metric's values, sorted: |d| of the similar pairs (S), and B (d of the pairs labelled 1,
 // -d of those labelled -1) split by sign, so that the different pairs' |d| (D = |B|) and B
 // itself are both counted in the same two arrays.
 struct SortedValues {
-  SortedArray similar;      // S
-  SortedArray positive;     // B > 0
-  SortedArray negative;     // -B for B < 0
-  std::uint64_t zeros = 0;  // B == 0
+  std::vector<double> similar;   // S, ascending
+  std::vector<double> positive;  // B > 0, ascending
+  std::vector<double> negative;  // -B for B < 0, ascending
+  std::uint64_t zeros = 0;       // B == 0
+};
 
-  // DS, a different pair's |d| = x against S: 2 #{S < x} + #{S == x}.
-  std::uint64_t ds_different(double x) const { return similar.twice_below(x); }
-  // DS, a similar pair's |d| = y against D: 2 #{D < y} + #{D == y}.
-  std::uint64_t ds_similar(double y) const {
-    return positive.twice_below(y) + negative.twice_below(y) + (y > 0 ? 2 : y == 0 ? 1 : 0) * zeros;
+// The structural-component counts of one metric's pairs, at their |d| in ascending order (a
+// sweep of each array). Twice the Mann-Whitney counts (ties half), exact integers:
+// DS, a different pair's |d| = x against S: 2 #{S < x} + #{S == x};
+// DS, a similar pair's |d| = y against D = |B|: 2 #{D < y} + #{D == y};
+// BW, a B value b against W = -B: 2 #{W < b} + #{W == b} = 2 #{B > -b} + #{B == -b}.
+class Counter {
+ public:
+  explicit Counter(const SortedValues& s)
+      : s_(s), similar_(s.similar), positive_(s.positive), negative_(s.negative) {}
+  std::uint64_t ds_different(double x) {
+    const auto [less, equal] = similar_.below_and_equal(x);
+    return 2 * less + equal;
   }
-  // BW, a B value b against W = -B: 2 #{W < b} + #{W == b} = 2 #{B > -b} + #{B == -b}.
-  std::uint64_t bw(double b) const {
-    const std::uint64_t pos = positive.size();
+  std::uint64_t ds_similar(double y) {
+    const auto [pl, pe] = positive_.below_and_equal(y);
+    const auto [nl, ne] = negative_.below_and_equal(y);
+    return 2 * (pl + nl) + pe + ne + (y > 0 ? 2 : 1) * s_.zeros;
+  }
+  std::uint64_t bw(double b) {  // |b| at least the previous query's
+    const std::uint64_t pos = s_.positive.size();
     if (b > 0) {  // -b < 0: every B >= 0, and the negative ones above -b (|B| < b)
-      const auto [less, equal] = negative.below_and_equal(b);
-      return 2 * (pos + zeros + less) + equal;
+      const auto [less, equal] = negative_.below_and_equal(b);
+      return 2 * (pos + s_.zeros + less) + equal;
     }
     if (b < 0) {  // -b > 0: the positive B above -b
-      const auto [less, equal] = positive.below_and_equal(-b);
+      const auto [less, equal] = positive_.below_and_equal(-b);
       return 2 * (pos - less - equal) + equal;
     }
-    return 2 * pos + zeros;
+    return 2 * pos + s_.zeros;
   }
+
+ private:
+  const SortedValues& s_;
+  Sweep similar_, positive_, negative_;
 };
 
 // Pairs in blocks: fn(begin, count, d) with d[m * count + i] metric m's difference of pair
 // begin + i, for consecutive blocks in pair order.
 using BlockFn = std::function<void(std::size_t begin, std::size_t count, const double* d)>;
 using PairBlocks = std::function<void(const BlockFn&)>;
-constexpr std::size_t kBlock = std::size_t(1) << 14;
+// Large enough that a block's sorted queries are dense in the sorted arrays (a sweep reads them
+// nearly in order), small enough to stay a few MB.
+constexpr std::size_t kBlock = std::size_t(1) << 18;
 
 // The structural components of Sun & Xu's fastDeLong (IEEE SPL 2014) of one list of ratings,
 // summed as they come: their means, then (second pass) their covariances between metrics, with
@@ -229,9 +223,9 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
     }
   });
   for (std::size_t m = 0; m < a.k; ++m) {
-    a.sorted[m].similar.values.reserve(a.similar);
-    a.sorted[m].positive.values.reserve(positive[m]);
-    a.sorted[m].negative.values.reserve(negative[m]);
+    a.sorted[m].similar.reserve(a.similar);
+    a.sorted[m].positive.reserve(positive[m]);
+    a.sorted[m].negative.reserve(negative[m]);
   }
   pairs([&](std::size_t begin, std::size_t count, const double* d) {
     for (std::size_t m = 0; m < a.k; ++m) {
@@ -239,27 +233,30 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
       for (std::size_t i = 0; i < count; ++i) {
         const int l = labels[begin + i];
         const double b = l == 1 ? d[m * count + i] : -d[m * count + i];
-        if (l == 0)
-          s.similar.values.push_back(std::fabs(b));
-        else if (b > 0)
-          s.positive.values.push_back(b);
-        else if (b < 0)
-          s.negative.values.push_back(-b);
-        else
+        if (l == 0) {
+          s.similar.push_back(std::fabs(b));
+        } else if (b > 0) {
+          s.positive.push_back(b);
+        } else if (b < 0) {
+          s.negative.push_back(-b);
+        } else {
           ++s.zeros;
+        }
       }
     }
   });
   for (SortedValues& s : a.sorted) {
-    for (SortedArray* v : {&s.similar, &s.positive, &s.negative}) v->index();
+    for (std::vector<double>* v : {&s.similar, &s.positive, &s.negative}) {
+      std::sort(v->begin(), v->end());
+    }
   }
 }
 
 // One pass over the pairs in the order of the pair lists: DS's lists (D: the different pairs in
 // pair order; S: the similar ones) and the first part of BW's (the pairs labelled 1), then a
 // second over the pairs labelled -1 (the rest of BW's list, in Metrics_performance.m's order).
-// Each block's counts are found in parallel (one slot per pair and metric), then summed in pair
-// order: the same bits on any number of threads.
+// Each block's counts are found per metric (the metrics in parallel, one slot per pair and
+// metric), then summed in pair order: the same bits on any number of threads.
 void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs,
                       bool first) {
   const double md = static_cast<double>(a.different), nd = static_cast<double>(a.similar);
@@ -270,18 +267,26 @@ void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const
   for (const int phase : {1, -1}) {
     pairs([&](std::size_t begin, std::size_t count, const double* d) {
       const std::int8_t* label = labels.data() + begin;
-      const auto n = static_cast<std::ptrdiff_t>(count);
-#pragma omp parallel for schedule(static)
-      for (std::ptrdiff_t i = 0; i < n; ++i) {
-        const int l = label[i];
-        for (std::size_t m = 0; m < k; ++m) {
-          const double x = d[m * count + static_cast<std::size_t>(i)];
-          const SortedValues& s = a.sorted[m];
-          const std::size_t at = m * count + static_cast<std::size_t>(i);
-          if (a.ds && phase == 1) {
-            ds_count[at] = l != 0 ? s.ds_different(std::fabs(x)) : s.ds_similar(std::fabs(x));
-          }
-          if (l == phase) bw_count[at] = s.bw(l == 1 ? x : -x);
+      const bool ds = a.ds && phase == 1;
+      // Each metric's counts of this block's pairs, found in the order of their |d| (one
+      // sweep of each sorted array), then summed below in pair order.
+#pragma omp parallel for schedule(dynamic, 1) if (k > 1)
+      for (std::ptrdiff_t mi = 0; mi < static_cast<std::ptrdiff_t>(k); ++mi) {
+        const std::size_t m = static_cast<std::size_t>(mi);
+        const double* dm = d + m * count;
+        std::vector<std::pair<double, std::uint32_t>> order;  // (|d|, pair in the block)
+        order.reserve(count);
+        for (std::size_t i = 0; i < count; ++i) {
+          if (ds || label[i] == phase) order.emplace_back(std::fabs(dm[i]), i);
+        }
+        std::sort(order.begin(), order.end());
+        Counter counter(a.sorted[m]);
+        for (const auto& [magnitude, i] : order) {
+          const int l = label[i];
+          const double x = dm[i];
+          if (ds) ds_count[m * count + i] = l != 0 ? counter.ds_different(std::fabs(x))
+                                                   : counter.ds_similar(std::fabs(x));
+          if (l == phase) bw_count[m * count + i] = counter.bw(l == 1 ? x : -x);
         }
       }
       for (std::size_t i = 0; i < count; ++i) {
@@ -362,7 +367,7 @@ KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
     km.se_bw = std::sqrt(r.cov_bw[m * k + m]);
     // B > 0 and W = -B < 0: the pairs ordered right, counted in both lists.
     km.c0 = static_cast<double>(2 * s.positive.size()) / (2 * md);
-    const std::vector<double>& sim = s.similar.values;
+    const std::vector<double>& sim = s.similar;
     km.thr_numpy = sim.empty() ? kNaN : percentile_numpy(sim, 0.95);
     km.thr_prctile = sim.empty() ? kNaN : percentile_prctile(sim, 0.95);
     r.metrics.push_back(km);

@@ -237,6 +237,24 @@ TEST(KrasulaPairs, SortedEqualsListedBitForBitOnRandomData) {
   EXPECT_GT(compared, 30);
 }
 
+// More pairs than one block of the analysis (2^18): the sweeps restart with each block.
+TEST(KrasulaPairs, SortedEqualsListedOverSeveralBlocks) {
+  std::mt19937_64 rng(371);
+  const std::size_t stimuli = 800;  // 319,600 pairs
+  std::uniform_real_distribution<double> mos_draw(1, 5), sd_draw(0.3, 1.2);
+  std::vector<double> mos, sd, n(stimuli, 15);
+  for (std::size_t i = 0; i < stimuli; ++i) {
+    mos.push_back(mos_draw(rng));
+    sd.push_back(sd_draw(rng));
+  }
+  const std::vector<std::vector<double>> scores = random_scores(rng, 2, stimuli, true);
+  const PairLabels pairs = label_pairs_j149(mos, sd, n);
+  ASSERT_GT(pairs.size(), std::size_t(1) << 18);
+  const std::vector<int> labels(pairs.label.begin(), pairs.label.end());
+  expect_same_result(krasula_analysis(scores, pairs),
+                     listed_analysis(listed_differences(scores, pairs), labels));
+}
+
 // The generated layouts are the pairs the nested loops list, in their order.
 TEST(KrasulaPairs, GeneratedPairsAreTheListedOnes) {
   const std::vector<std::string> groups = {"b", "a", "b", "b", "a", "c"};
