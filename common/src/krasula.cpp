@@ -284,8 +284,9 @@ void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const
         for (const auto& [magnitude, i] : order) {
           const int l = label[i];
           const double x = dm[i];
-          if (ds) ds_count[m * count + i] = l != 0 ? counter.ds_different(std::fabs(x))
-                                                   : counter.ds_similar(std::fabs(x));
+          if (ds)
+            ds_count[m * count + i] =
+                l != 0 ? counter.ds_different(std::fabs(x)) : counter.ds_similar(std::fabs(x));
           if (l == phase) bw_count[m * count + i] = counter.bw(l == 1 ? x : -x);
         }
       }
@@ -488,13 +489,14 @@ PairLabels label_pairs_j149(const std::vector<double>& mos, const std::vector<do
     require(std::isfinite(mos[i]) && std::isfinite(sd[i]) && std::isfinite(n[i]),
             "pair labels: stimulus " + std::to_string(i + 1) + " has a non-finite MOS, SD or n");
     require(sd[i] >= 0, "pair labels: stimulus " + std::to_string(i + 1) + " has a negative SD");
-    require(n[i] >= 2, "pair labels: stimulus " + std::to_string(i + 1) +
-                           " has fewer than 2 observers (n)");
+    require(n[i] >= 2,
+            "pair labels: stimulus " + std::to_string(i + 1) + " has fewer than 2 observers (n)");
   }
   PairLabels pairs =
       PairLabels::generated(PairLabels::Layout::kLowerTriangle, group_ids(groups, count));
-  pairs.rule = "one-sided 95 % z test of the MOS difference, SE = sqrt(SD1^2/n1 + SD2^2/n2) "
-               "(Krasula; ITU-T J.149)";
+  pairs.rule =
+      "one-sided 95 % z test of the MOS difference, SE = sqrt(SD1^2/n1 + SD2^2/n2) "
+      "(Krasula; ITU-T J.149)";
   pairs.label.reserve(pairs.pair_count());
   pairs.for_each([&](std::size_t j, std::size_t i) {
     double se = std::sqrt(sd[j] * sd[j] / n[j] + sd[i] * sd[i] / n[i]);
@@ -519,8 +521,8 @@ PairLabels label_pairs_raw(const std::vector<std::vector<double>>& scores,
                                " has fewer than 2 individual scores");
     Sum sum;
     for (double x : s) {
-      require(std::isfinite(x), "pair labels: stimulus " + std::to_string(i + 1) +
-                                    " has a non-finite score");
+      require(std::isfinite(x),
+              "pair labels: stimulus " + std::to_string(i + 1) + " has a non-finite score");
       sum.add(x);
     }
     const double len = static_cast<double>(s.size());
@@ -531,8 +533,9 @@ PairLabels label_pairs_raw(const std::vector<std::vector<double>>& scores,
   }
   PairLabels pairs =
       PairLabels::generated(PairLabels::Layout::kAllOrdered, group_ids(groups, count));
-  pairs.rule = "two-sided z test |z| > 2 of the mean difference, var with N-1, every ordered "
-               "pair and self-pair (VMAF AucPerfMetric)";
+  pairs.rule =
+      "two-sided z test |z| > 2 of the mean difference, var with N-1, every ordered "
+      "pair and self-pair (VMAF AucPerfMetric)";
   pairs.label.reserve(pairs.pair_count());
   pairs.for_each([&](std::size_t i, std::size_t j) {
     double den = var_over_n[i] + var_over_n[j];

@@ -114,7 +114,7 @@ struct KrasulaMetric {
 
 /// A test between two metrics.
 struct KrasulaComparison {
-  std::size_t a = 0, b = 0;  ///< metric indices, a < b
+  std::size_t a = 0, b = 0;       ///< metric indices, a < b
   double cov_ds = 0, cov_bw = 0;  ///< DeLong covariances of the two metrics' AUCs
   /// DeLong's test: z = |AUC_a - AUC_b| / sqrt(C_aa + C_bb - 2 C_ab), p = 2 (1 - Phi(z)).
   double z_delong_ds = 0, p_delong_ds = 1, z_delong_bw = 0, p_delong_bw = 1;
@@ -138,9 +138,10 @@ struct KrasulaResult {
 /// With fewer than 2 similar pairs the DS values (AUC_DS, its SE and tests, THR) are NaN.
 /// Cost: the pairs are never listed per metric as Mann-Whitney / DeLong would; each metric's
 /// |d| and B values are sorted once (8 bytes a pair), and each pair's structural components
-/// (the share of the other class below it, ties counting half) are counted in them by binary
-/// search: O(P log P) time, 8 bytes a pair and metric (50 M pairs: 400 MB a metric). Every value
-/// is the one the pair lists give, bit for bit (the sums run in the same order).
+/// (the share of the other class below it, ties counting half) are counted in them, blocks of
+/// pairs sorted by |d| sweeping the sorted arrays: O(P log P) time, 8 bytes a pair and metric
+/// (50 M pairs: 400 MB a metric). Every value is the one the pair lists give, bit for bit (the
+/// counts are exact integers, the sums run in the pair lists' order).
 /// @throws std::invalid_argument  lengths differ, a non-finite difference, a label other than
 ///                                -1, 0, 1, or fewer than 2 different pairs
 KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differences,
