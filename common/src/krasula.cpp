@@ -1,5 +1,9 @@
 #include "qm3d/common/krasula.h"
 
+#include <omp.h>
+
+#include <parallel/algorithm>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -247,7 +251,8 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
   });
   for (SortedValues& s : a.sorted) {
     for (std::vector<double>* v : {&s.similar, &s.positive, &s.negative}) {
-      std::sort(v->begin(), v->end());
+      // In place (no copy of 8 bytes a pair); a multiset of doubles >= 0: one result.
+      __gnu_parallel::sort(v->begin(), v->end(), __gnu_parallel::balanced_quicksort_tag());
     }
   }
 }
@@ -255,8 +260,8 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
 // One pass over the pairs in the order of the pair lists: DS's lists (D: the different pairs in
 // pair order; S: the similar ones) and the first part of BW's (the pairs labelled 1), then a
 // second over the pairs labelled -1 (the rest of BW's list, in Metrics_performance.m's order).
-// Each block's counts are found per metric (the metrics in parallel, one slot per pair and
-// metric), then summed in pair order: the same bits on any number of threads.
+// Each block's counts are found per metric (the block's sorted order split between threads, one
+// slot per pair and metric), then summed in pair order: the same bits on any number of threads.
 void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs,
                       bool first) {
   const double md = static_cast<double>(a.different), nd = static_cast<double>(a.similar);
@@ -270,24 +275,35 @@ void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const
       const bool ds = a.ds && phase == 1;
       // Each metric's counts of this block's pairs, found in the order of their |d| (one
       // sweep of each sorted array), then summed below in pair order.
-#pragma omp parallel for schedule(dynamic, 1) if (k > 1)
-      for (std::ptrdiff_t mi = 0; mi < static_cast<std::ptrdiff_t>(k); ++mi) {
-        const std::size_t m = static_cast<std::size_t>(mi);
+      for (std::size_t m = 0; m < k; ++m) {
         const double* dm = d + m * count;
         std::vector<std::pair<double, std::uint32_t>> order;  // (|d|, pair in the block)
         order.reserve(count);
         for (std::size_t i = 0; i < count; ++i) {
           if (ds || label[i] == phase) order.emplace_back(std::fabs(dm[i]), i);
         }
-        std::sort(order.begin(), order.end());
-        Counter counter(a.sorted[m]);
-        for (const auto& [magnitude, i] : order) {
-          const int l = label[i];
-          const double x = dm[i];
-          if (ds)
-            ds_count[m * count + i] =
-                l != 0 ? counter.ds_different(std::fabs(x)) : counter.ds_similar(std::fabs(x));
-          if (l == phase) bw_count[m * count + i] = counter.bw(l == 1 ? x : -x);
+        __gnu_parallel::sort(order.begin(), order.end());  // unique keys: one result
+        // Each thread sweeps its own part of the order (its first search gallops from 0).
+        const auto parts = static_cast<std::ptrdiff_t>(
+            std::min<std::size_t>(static_cast<std::size_t>(omp_get_max_threads()),
+                                  1 + order.size() / 4096));
+#pragma omp parallel for schedule(static, 1)
+        for (std::ptrdiff_t part = 0; part < parts; ++part) {
+          const std::size_t from = order.size() * static_cast<std::size_t>(part) /
+                                   static_cast<std::size_t>(parts);
+          const std::size_t to = order.size() * static_cast<std::size_t>(part + 1) /
+                                 static_cast<std::size_t>(parts);
+          Counter counter(a.sorted[m]);
+          for (std::size_t o = from; o < to; ++o) {
+            const std::uint32_t i = order[o].second;
+            const int l = label[i];
+            const double x = dm[i];
+            if (ds) {
+              ds_count[m * count + i] =
+                  l != 0 ? counter.ds_different(std::fabs(x)) : counter.ds_similar(std::fabs(x));
+            }
+            if (l == phase) bw_count[m * count + i] = counter.bw(l == 1 ? x : -x);
+          }
         }
       }
       for (std::size_t i = 0; i < count; ++i) {
