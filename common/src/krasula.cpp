@@ -2,8 +2,6 @@
 
 #include <omp.h>
 
-#include <parallel/algorithm>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <parallel/algorithm>
 #include <stdexcept>
 
 #include "qm3d/common/evaluation.h"
@@ -284,15 +283,14 @@ void component_passes(Analysis& a, const std::vector<std::int8_t>& labels, const
         }
         __gnu_parallel::sort(order.begin(), order.end());  // unique keys: one result
         // Each thread sweeps its own part of the order (its first search gallops from 0).
-        const auto parts = static_cast<std::ptrdiff_t>(
-            std::min<std::size_t>(static_cast<std::size_t>(omp_get_max_threads()),
-                                  1 + order.size() / 4096));
+        const auto parts = static_cast<std::ptrdiff_t>(std::min<std::size_t>(
+            static_cast<std::size_t>(omp_get_max_threads()), 1 + order.size() / 4096));
 #pragma omp parallel for schedule(static, 1)
         for (std::ptrdiff_t part = 0; part < parts; ++part) {
-          const std::size_t from = order.size() * static_cast<std::size_t>(part) /
-                                   static_cast<std::size_t>(parts);
-          const std::size_t to = order.size() * static_cast<std::size_t>(part + 1) /
-                                 static_cast<std::size_t>(parts);
+          const std::size_t from =
+              order.size() * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
+          const std::size_t to =
+              order.size() * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
           Counter counter(a.sorted[m]);
           for (std::size_t o = from; o < to; ++o) {
             const std::uint32_t i = order[o].second;
