@@ -85,6 +85,16 @@ ScoredRow failed_row(const ListPair& pair, const std::string& metric, const std:
   return s;
 }
 
+// --save-views DIR in a batch: each pair's views go to DIR/<its report name> (the same stems
+// and hash of both paths), so that pairs, --jobs and shards never write over each other's.
+void per_pair_views(OptionValues& options, const ListPair& pair) {
+  const auto it = options.find("save_views");
+  if (it == options.end() || !it->is_string() || it->get<std::string>().empty()) return;
+  std::string folder = report_file_name(pair.reference, pair.distorted);
+  folder.resize(folder.size() - std::string(".html").size());
+  *it = (std::filesystem::path(it->get<std::string>()) / folder).string();
+}
+
 // Scores one pair; never throws (a failure becomes the row's error).
 ScoredRow score_pair(const ListPair& pair, const std::string& metric, const BatchOptions& o) {
   const auto ref = resolve(o.list, pair.reference), dist = resolve(o.list, pair.distorted);
@@ -100,6 +110,7 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     const auto specs = metrics_for(metric, r, d);
     ScoreRequest request = o.request;
     request.release_inputs = o.report_dir.empty();  // a report reads both inputs
+    per_pair_views(request.options, pair);
     MetricResult result = score(*specs.front(), r, d, request);
     result.provenance.reference = pair.reference;
     result.provenance.distorted = pair.distorted;
@@ -554,8 +565,16 @@ void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {
       batch_cmd
           ->add_option("--pair-timeout", o.pair_timeout_s,
                        "Stop scoring a pair after this many seconds; its row records the "
-                       "timeout (default: no limit)")
-          ->check(CLI::PositiveNumber)
+                       "timeout (default: no limit; over 1e9 s, inf included: no limit)")
+          ->check(CLI::Validator(
+              [](std::string& text) {
+                // CLI::PositiveNumber lets "nan" through (NaN <= 0 is false).
+                double v = 0;
+                const bool number = CLI::detail::lexical_cast(text, v);
+                return number && v > 0 ? std::string()
+                                       : "a number of seconds > 0 needed, not \"" + text + "\"";
+              },
+              "SECONDS > 0"))
           ->type_name("SECONDS");
   batch_cmd
       ->add_flag_function(

@@ -92,6 +92,19 @@ void collect_values(EvalData& d) {
 // "d1_mse", "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe
 // (f1..f8) and for files without a metric column or with several metrics.
 void find_orientation(EvalData& d, const EvalCommandOptions& o) {
+  // A name that is not the evaluated column (a typo) is refused, never silently ignored.
+  const std::string& evaluated = d.scores_table.header[d.scores_value];
+  for (const std::string& name : o.lower_is_better) {
+    if (name != evaluated) {
+      throw InputError("--lower-is-better " + name +
+                       ": no such score column (evaluated: " + evaluated + ")");
+    }
+  }
+  if (!o.lower_is_better.empty()) {
+    d.higher_is_better = false;
+    d.orientation_source = "--lower-is-better";
+    return;
+  }
   if (o.orientation != "auto") {
     d.higher_is_better = o.orientation == "quality";
     d.orientation_source = "--orientation";

@@ -127,6 +127,17 @@ void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
   m.orientation_source = "assumed: not a registered metric";
 }
 
+// Every --lower-is-better name must be one of the series (a typo is refused, never ignored).
+void check_lower_is_better(const std::vector<Series>& series, const EvalCommandOptions& o) {
+  for (const std::string& name : o.lower_is_better) {
+    const auto same = [&](const Series& s) { return s.name == name; };
+    if (std::any_of(series.begin(), series.end(), same)) continue;
+    std::string names;
+    for (const Series& s : series) names += (names.empty() ? "" : ", ") + s.name;
+    throw InputError("--lower-is-better " + name + ": no such metric (the metrics: " + names + ")");
+  }
+}
+
 // ---- the subjective data -------------------------------------------------------------------
 
 /// What the MOS file and the extra files say of the kept stimuli.
@@ -201,8 +212,11 @@ PairLabels pairs_from_raw(const EvalCommandOptions& o, const Stimuli& st,
     }
     const auto v = cell_number(raw, r, score);
     if (!v) {
-      throw FormatError(raw.path + ":" + std::to_string(raw.line_numbers[r]) +
-                        ": an empty score");
+      const std::string& cell = raw.rows[r][score];
+      throw FormatError(
+          raw.path + ":" + std::to_string(raw.line_numbers[r]) + ": " +
+          (cell.empty() ? "an empty score" : "the score \"" + cell + "\" is not a number") +
+          " (every individual score must be a number)");
     }
     scores[it->second].push_back(*v);
   }
@@ -237,6 +251,10 @@ PairLabels pairs_from_file(const EvalCommandOptions& o, const Stimuli& st) {
       }
       ij[k] = it->second;
     }
+    if (ij[0] == ij[1]) {
+      throw FormatError(where + ": stimulus \"" + st.keys[ij[0]] +
+                        "\" is paired with itself (a pair is two different stimuli)");
+    }
     const auto label = cell_number(t, r, l);
     if (!label || (*label != -1 && *label != 0 && *label != 1)) {
       throw FormatError(where + ": the label must be 1 (first better), -1 or 0");
@@ -244,6 +262,22 @@ PairLabels pairs_from_file(const EvalCommandOptions& o, const Stimuli& st) {
     pairs.add(ij[0], ij[1], static_cast<int>(*label));
   }
   return pairs;
+}
+
+// Krasula's analysis needs 2 significantly different pairs: fewer is a property of the data
+// (constant individual scores, SDs too large for any difference to be significant), refused as
+// the other data errors are (exit code 2), naming the file the labels come from.
+void check_pair_labels(const PairLabels& pairs, const EvalCommandOptions& o) {
+  std::size_t different = 0;
+  for (const auto l : pairs.label) different += l != 0;
+  if (different >= 2) return;
+  const std::string source = !o.raw.empty()     ? o.raw + " (--raw)"
+                             : !o.pairs.empty() ? o.pairs + " (--pairs)"
+                                                : o.mos + " (--sd-column " + o.sd_column + ")";
+  throw FormatError(source + ": " + std::to_string(different) + " of " +
+                    std::to_string(pairs.size()) + " pairs are significantly different; " +
+                    "Krasula's analysis needs at least 2 (constant or too uncertain subjective "
+                    "scores?)");
 }
 
 // ---- output --------------------------------------------------------------------------------
@@ -487,6 +521,7 @@ int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool 
     }
   }
   if (series.empty()) throw FormatError(o.scores + ": no numeric score column");
+  check_lower_is_better(series, o);
 
   // The stimuli every series and the MOS have a finite value for, in the first series' order.
   std::vector<std::map<std::string, double>> values(series.size());
@@ -566,6 +601,7 @@ int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool 
   if (!o.sd_column.empty()) subjective.pairs = pairs_from_sd(mos, mos_value, st, o, groups);
   if (!o.raw.empty()) subjective.pairs = pairs_from_raw(o, st, groups);
   if (!o.pairs.empty()) subjective.pairs = pairs_from_file(o, st);
+  if (subjective.pairs) check_pair_labels(*subjective.pairs, o);
 
   std::vector<MetricScores> metrics;
   std::vector<std::string> names;

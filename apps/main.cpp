@@ -150,8 +150,8 @@ void check_score_outputs(const ScoreCli& cli, bool report_command) {
 
 int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   const ScoreCli& cli = *c.cli;
-  const std::vector<const MetricSpec*> specs = c.spec ? std::vector<const MetricSpec*>{c.spec}
-                                                      : all_metrics();
+  const std::vector<const MetricSpec*> specs =
+      c.spec ? std::vector<const MetricSpec*>{c.spec} : compare_metrics();
   ScoreRequest request = score_request(cli.run, c.spec, g.threads, g.data_dir);
   request.options = metric_option_values(specs, cli.options);
   std::optional<ReportSettings> report;  // resolved first: a missing three.js fails fast
@@ -252,7 +252,7 @@ int run(int argc, char** argv) {
     add_run_options(c.cmd, cli.run, c.spec);
     add_read_options(c.cmd, cli.colour_scale);
     add_texture_options(c.cmd, cli.ref_texture, cli.dist_texture);
-    add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : all_metrics(),
+    add_metric_options(c.cmd, c.spec ? std::vector<const MetricSpec*>{c.spec} : compare_metrics(),
                        cli.options);
     if (!c.report) add_output_options(c.cmd, cli.out, c.spec && (c.spec->per_element_on_input ||
                                                                    c.spec->per_element_positions));

@@ -98,9 +98,9 @@ std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
       "merge",
       "Join the results of `qm3d batch LIST --shard K/N` runs into the rows one `qm3d batch "
       "LIST` would have written, in LIST's order. Missing, duplicated, conflicting and failed "
-      "pairs are reported on stderr (a row whose status is ok but whose score is not a finite "
-      "number is written as an error row); rows scored with other settings are refused; exit "
-      "code 2 when a pair is missing, conflicts or failed");
+      "pairs are reported on stderr (a row whose status is ok but whose score is neither a finite "
+      "number nor inf is written as an error row); rows scored with other settings are refused; "
+      "exit code 2 when a pair is missing, conflicts or failed");
   add_common(c->merge);
   c->merge->add_option("SHARD_RESULTS", c->inputs, "Results CSVs of the shards (e.g. out/OUT_*.csv)")
       ->required();

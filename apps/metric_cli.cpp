@@ -82,6 +82,14 @@ std::vector<const MetricSpec*> all_metrics() {
   return all;
 }
 
+std::vector<const MetricSpec*> compare_metrics() {
+  std::vector<const MetricSpec*> out;
+  for (const auto& m : registry().metrics()) {
+    if (m.in_compare) out.push_back(&m);
+  }
+  return out;
+}
+
 void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& specs,
                         MetricOptionsCli& cli) {
   std::set<std::string> added;

@@ -30,6 +30,9 @@ struct RunCli {
 
 /// Every registered metric, in registration order.
 std::vector<const MetricSpec*> all_metrics();
+/// The metrics compare and report may run (in_compare), in registration order: only their
+/// options are theirs (ibsm's --views, --save-views ... would be accepted and ignored).
+std::vector<const MetricSpec*> compare_metrics();
 /// The tool's flag of a metric option: "--" + its name with '_' as '-' (color_space ->
 /// --color-space; the Python keyword keeps the name).
 std::string cli_flag(const std::string& option);

@@ -129,7 +129,7 @@ JobOutcome WorkerProcess::run(const std::string& job, double timeout_s,
                               const std::function<void(const std::string&)>& line) {
   JobOutcome outcome;
   if (pid_ < 0 && !start(outcome.spawn_error)) return outcome;
-  const bool limited = timeout_s > 0;
+  const bool limited = timeout_s > 0 && timeout_s <= kMaxJobTimeoutS;
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(limited ? timeout_s : 0));
   bool alive = write_all(to_worker_, job + "\n");

@@ -26,6 +26,11 @@ struct JobOutcome {
   std::string spawn_error;         ///< when not finished: the worker could not be started
 };
 
+/// The longest time limit a job can have, 1e9 s (31 years): a longer one (inf included) is no
+/// limit. The deadline is a steady_clock time point in int64 nanoseconds, which overflow from
+/// 9.2e9 s on (--pair-timeout 1e10 would otherwise have every job time out at once).
+inline constexpr double kMaxJobTimeoutS = 1e9;
+
 /// A worker process: /proc/self/exe with `args` (args[0] is the program name it sees), jobs on
 /// its stdin, one line each, its output on its stdout; stderr shared with this process. Used by
 /// one thread at a time; several may exist at once.
@@ -38,8 +43,8 @@ class WorkerProcess {
 
   /// Sends `job` (one line), starting the worker first when none runs, and gives each complete
   /// line of its output to `line` as it arrives, up to the end line; kills the worker when that
-  /// takes over `timeout_s` seconds (positive). Never throws for the worker's faults: they are
-  /// in the outcome.
+  /// takes over `timeout_s` seconds (positive; 0, NaN or over kMaxJobTimeoutS: no limit). Never
+  /// throws for the worker's faults: they are in the outcome.
   JobOutcome run(const std::string& job, double timeout_s,
                  const std::function<void(const std::string&)>& line);
 

@@ -128,11 +128,14 @@ void check_same_settings(const Row& row, std::optional<Row>& first, std::size_t 
   }
 }
 
-bool is_finite_number(const std::string& s) {
+// A score batch writes on an ok row: a finite number, or "inf" (the PSNR of identical inputs:
+// a quality may be +inf, acceptable_score in common/src/metric.cpp). NaN and -inf never are.
+bool is_batch_score(const std::string& s) {
   double value = 0;
   const char* end = s.data() + s.size();
   const auto [ptr, ec] = std::from_chars(s.data(), end, value);
-  return !s.empty() && ec == std::errc() && ptr == end && std::isfinite(value);
+  return !s.empty() && ec == std::errc() && ptr == end &&
+         (std::isfinite(value) || value == HUGE_VAL);
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -331,11 +334,12 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
                                   " identical rows (" + places + "), one kept");
     }
     Row kept = found[0];
-    if (kept.fields[status_column] == "ok" && !is_finite_number(kept.fields[score_column])) {
+    if (kept.fields[status_column] == "ok" && !is_batch_score(kept.fields[score_column])) {
       // A row that says ok without a score is not a result: kept as the error it is.
       kept.fields[status_column] = "error";
       kept.fields[error_column] = "merge: status ok but the score \"" + kept.fields[score_column] +
-                                  "\" is not a finite number (" + where(kept) + ")";
+                                  "\" is not a score (a finite number or inf) (" + where(kept) +
+                                  ")";
       kept.fields[score_column].clear();
       kept.line = csv_line(kept.fields);
     }

@@ -91,9 +91,9 @@ struct MergeResult {
 /// Joins result files into the rows of `expected` (the keys a single batch over the whole list
 /// writes, in its order; a key listed k times may have k identical rows without a warning).
 /// Rows of one key are the same when every column but `seconds` is equal. A kept row whose
-/// status is ok but whose score is not a finite number becomes an error row saying so (and is
-/// listed in `failed`). Throws FormatError naming the file for a file without header, headers
-/// that differ, a row whose number of columns differs from its header's, or rows whose
+/// status is ok but whose score is neither a finite number nor inf becomes an error row saying so
+/// (and is listed in `failed`). Throws FormatError naming the file for a file without header,
+/// headers that differ, a row whose number of columns differs from its header's, or rows whose
 /// `settings` column (batch_results.h) differs.
 MergeResult merge_results(const std::vector<ResultKey>& expected,
                           const std::vector<ResultFile>& files);

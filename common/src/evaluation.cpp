@@ -21,6 +21,9 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Fewest pairs the 4-parameter logistic can be fitted to (one more than its parameters).
 constexpr std::size_t kMinPairsForFit = 5;
+/// Without the logistic (EvaluationOptions::require_logistic false): PLCC, SROCC and KROCC are
+/// defined from 2 stimuli, meaningful (not +-1 by construction) from 3.
+constexpr std::size_t kMinStimuliForCorrelations = 3;
 /// Starting scales |beta4| of the logistic, in standard deviations of x (a sharp, a medium and a
 /// nearly linear mapping); the best optimum is kept.
 constexpr std::array<double, 3> kStartScalesSd = {0.3, 1.0, 3.0};
@@ -202,6 +205,7 @@ LogisticFit fit_logistic_from(const std::vector<double>& x, const std::vector<do
 
 // The statistics of one sample, in the order of kStatisticCount below.
 constexpr std::size_t kStatisticCount = 6;
+constexpr std::size_t kCorrelationCount = 3;  ///< PLCC, SROCC, KROCC come first
 using Values = std::array<double, kStatisticCount>;
 
 std::vector<double> mapped(const LogisticFunction& f, const std::vector<double>& x) {
@@ -248,18 +252,27 @@ Resample draw_resample(std::mt19937_64& rng, const std::vector<double>& x,
   return s;
 }
 
-// Statistics of every replicate in which all of them are defined (in draw order).
+// The correlations alone (no logistic fit: too few stimuli for one); the rest NaN.
+Values correlations(const std::vector<double>& x, const std::vector<double>& y) {
+  return {pearson(x, y), spearman(x, y), kendall_tau_b(x, y), kNaN, kNaN, kNaN};
+}
+
+// Statistics of every replicate in which all of them are defined (in draw order); without
+// `logistic`, the correlations alone.
 std::vector<Values> bootstrap_values(const std::vector<double>& x, const std::vector<double>& y,
                                      const std::vector<double>& ci, const LogisticFit& full_fit,
-                                     const EvaluationOptions& options) {
+                                     const EvaluationOptions& options, bool logistic) {
   std::mt19937_64 rng(options.seed);
   std::vector<Values> replicates;
+  const std::size_t defined = logistic ? kStatisticCount : kCorrelationCount;
   for (std::size_t b = 0; b < options.bootstrap; ++b) {
     const Resample s = draw_resample(rng, x, y, ci);
     try {
-      const LogisticFit fit = fit_logistic_from(s.x, s.y, full_fit.function, options.fit);
-      const Values v = sample_statistics(s.x, s.y, s.ci, fit);
-      if (std::all_of(v.begin(), v.end(), [](double d) { return std::isfinite(d); })) {
+      const Values v =
+          logistic ? sample_statistics(s.x, s.y, s.ci,
+                                       fit_logistic_from(s.x, s.y, full_fit.function, options.fit))
+                   : correlations(s.x, s.y);
+      if (std::all_of(v.begin(), v.begin() + defined, [](double d) { return std::isfinite(d); })) {
         replicates.push_back(v);
       }
     } catch (const NumericError&) {
@@ -407,14 +420,23 @@ EvaluationResult evaluate_scores(const std::vector<double>& scores, const std::v
   check_evaluation_input(scores, mos, mos_ci95, options);
   EvaluationResult r;
   r.count = scores.size();
-  r.fit = fit_logistic(scores, mos, options.fit);
-  const Values point = sample_statistics(scores, mos, mos_ci95, r.fit);
-  const std::vector<Values> replicates = bootstrap_values(scores, mos, mos_ci95, r.fit, options);
+  const bool logistic = options.require_logistic || scores.size() >= kMinPairsForFit;
+  if (!logistic && scores.size() < kMinStimuliForCorrelations) {
+    throw NumericError("evaluation: " + std::to_string(scores.size()) + " stimuli, at least " +
+                       std::to_string(kMinStimuliForCorrelations) + " needed");
+  }
+  if (logistic) r.fit = fit_logistic(scores, mos, options.fit);
+  const Values point =
+      logistic ? sample_statistics(scores, mos, mos_ci95, r.fit) : correlations(scores, mos);
+  const std::vector<Values> replicates =
+      bootstrap_values(scores, mos, mos_ci95, r.fit, options, logistic);
   r.bootstrap_replicates = options.bootstrap;
   r.bootstrap_used = replicates.size();
   std::array<Statistic, kStatisticCount> stats;
   for (std::size_t k = 0; k < kStatisticCount; ++k) {
-    stats[k] = {point[k], percentile_interval(replicates, k, options.confidence)};
+    const bool defined = logistic || k < kCorrelationCount;
+    stats[k] = {point[k],
+                defined ? percentile_interval(replicates, k, options.confidence) : std::nullopt};
   }
   r.plcc = stats[0];
   r.srocc = stats[1];

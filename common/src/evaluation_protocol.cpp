@@ -66,9 +66,12 @@ ProtocolResult run_protocol(const std::vector<MetricScores>& metrics,
     }
   }
   ProtocolResult r;
+  // The protocol reports the correlations of evaluate_scores, not its logistic: with --mapping
+  // none or linear, 3 or 4 stimuli are enough (VMAF's own tests have 4).
+  EvaluationOptions evaluation = options.evaluation;
+  evaluation.require_logistic = false;
   for (const MetricScores& m : metrics) {
-    r.evaluations.push_back(
-        evaluate_scores(m.scores, subjective.mos, subjective.ci95, options.evaluation));
+    r.evaluations.push_back(evaluate_scores(m.scores, subjective.mos, subjective.ci95, evaluation));
     r.p1401.push_back(evaluate_p1401(m.scores, subjective.mos, options.mapping, subjective.ci95,
                                      options.evaluation.fit));
   }

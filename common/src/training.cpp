@@ -50,6 +50,12 @@ Standardised standardise(const std::vector<FeatureVector>& features, const std::
     std::vector<double> column;
     for (const FeatureVector& f : features) column.push_back(f[cols[c]]);
     const double mean = mean_pool(column), sd = population_sd(column, mean);
+    if (!std::isfinite(mean) || !std::isfinite(sd)) {
+      // Values near 1e300: the squares overflow; every z would be 0 ("constant" further on).
+      throw NumericError("feature " + feature_name(cols[c]) +
+                         " has values too large to standardise (its mean or standard deviation "
+                         "overflows a double)");
+    }
     if (!(sd > 0)) throw NumericError("feature " + feature_name(cols[c]) + " is constant");
     for (Eigen::Index i = 0; i < n; ++i) s.z(i, c) = (column[i] - mean) / sd;
     s.feature_mean.push_back(mean);
@@ -57,6 +63,11 @@ Standardised standardise(const std::vector<FeatureVector>& features, const std::
   }
   s.y_mean = mean_pool(mos);
   s.y_sd = population_sd(mos, s.y_mean);
+  if (!std::isfinite(s.y_mean) || !std::isfinite(s.y_sd)) {
+    throw NumericError(
+        "the subjective scores are too large to standardise (their mean or "
+        "standard deviation overflows a double)");
+  }
   if (!(s.y_sd > 0)) throw NumericError("the subjective scores are constant");
   for (double m : mos) s.y.push_back((m - s.y_mean) / s.y_sd);
   return s;

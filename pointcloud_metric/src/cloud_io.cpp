@@ -86,9 +86,10 @@ CloudData read_cloud_data(const std::filesystem::path& path, CloudFormat format,
 
 void require_colours(const ColoredCloud& cloud, const std::string& name) {
   if (cloud.colors.empty() && !cloud.positions.empty()) {
-    throw FormatError(name +
-                      ": no vertex colours (PCQM needs one colour per point; expected "
-                      "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties)");
+    const bool pcd = lower(std::filesystem::path(name).extension().string()) == ".pcd";
+    throw FormatError(name + ": no vertex colours (PCQM needs one colour per point; expected " +
+                      (pcd ? "a packed 'rgb' or 'rgba' PCD field)"
+                           : "red/green/blue, r/g/b or diffuse_red/green/blue vertex properties)"));
   }
 }
 

@@ -154,6 +154,7 @@ struct PcdColumns {
   std::size_t field[4] = {0, 0, 0, 0};  // x, y, z, rgb (or rgba)
   std::size_t column[4] = {0, 0, 0, 0};
   std::size_t columns = 0;  // values per ASCII line (a field of COUNT n takes n)
+  bool colour = true;       // an rgb / rgba field (without: no colours, as a colourless PLY)
 };
 
 std::optional<std::size_t> layout_field(const PcdLayout& l, const std::string& name) {
@@ -161,12 +162,6 @@ std::optional<std::size_t> layout_field(const PcdLayout& l, const std::string& n
     if (l.fields[f] == name) return f;
   }
   return std::nullopt;
-}
-
-FormatError no_colours(const std::filesystem::path& path) {
-  return FormatError(path.string() +
-                     ": no vertex colours (PCQM needs one colour per point; expected a packed "
-                     "'rgb' or 'rgba' PCD field)");
 }
 
 // The fields x, y, z (float or double) and rgb / rgba (4 bytes), each of COUNT 1.
@@ -183,8 +178,11 @@ PcdColumns pcd_columns(const PcdLayout& l, const std::filesystem::path& path) {
   }
   auto rgb = layout_field(l, "rgb");
   if (!rgb) rgb = layout_field(l, "rgba");
-  if (!rgb) throw no_colours(path);
-  if (l.sizes[*rgb] != 4) {
+  // A cloud without colours reads as a colourless PLY does: the metrics that need colours say
+  // so (require_colours), the others (psnr --no-color, sample) take its points.
+  c.colour = rgb.has_value();
+  if (!rgb) rgb = c.field[0];
+  if (c.colour && l.sizes[*rgb] != 4) {
     throw FormatError(path.string() + ": PCD field '" + l.fields[*rgb] +
                       "' is not a packed 4-byte colour");
   }
@@ -290,7 +288,7 @@ void read_ascii_point(const PcdLine& line, const PcdLayout& l, const PcdColumns&
     position[a] =
         l.sizes[c.field[a]] == 4 ? double(line.number<float>(column)) : line.number<double>(column);
   }
-  colour = ascii_packed_colour(line, c.column[3], l.types[c.field[3]]);
+  if (c.colour) colour = ascii_packed_colour(line, c.column[3], l.types[c.field[3]]);
 }
 
 // PCL reads a line with a value too many or too few, or data beyond POINTS, without a word
@@ -316,6 +314,7 @@ ColoredCloud read_ascii_pcd(const std::string& bytes, const PcdLayout& l, const 
     read_ascii_point(line, l, c, out.positions[n], out.colors[n]);
     ++n;
   }
+  if (!c.colour) out.colors.clear();
   if (n < l.points) {
     throw FormatError(path.string() + ": PCD data ends after " + std::to_string(n) + " of the " +
                       std::to_string(l.points) + " points POINTS declares");
@@ -433,8 +432,11 @@ ColoredCloud decode_points(const std::uint8_t* data, const PcdLayout& l, const P
       const std::uint8_t* v = data + at[a].first + i * at[a].stride;
       out.positions[i][a] = l.sizes[c.field[a]] == 8 ? load<double>(v) : double(load<float>(v));
     }
-    out.colors[i] = unpack_colour(load<std::uint32_t>(data + at[3].first + i * at[3].stride));
+    if (c.colour) {
+      out.colors[i] = unpack_colour(load<std::uint32_t>(data + at[3].first + i * at[3].stride));
+    }
   }
+  if (!c.colour) out.colors.clear();
   return out;
 }
 

@@ -483,7 +483,8 @@ std::vector<Vec3> estimated_normals(const std::vector<Vec3>& positions, int thre
   return out;
 }
 
-std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak, bool peak_given) {
+std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak,
+                      const std::string& peak_source) {
   std::ostringstream out;
   const auto value = [&](const char* name) { return short_number(*find_value(v, name)); };
   out << "[D1 " << value("d1_psnr") << " dB";
@@ -494,8 +495,7 @@ std::string text_note(const NamedValues& v, const PsnrOptions& o, double peak, b
       out << ", " << names[c] << ' ' << value(("c" + std::to_string(c) + "_psnr").c_str()) << " dB";
     }
   }
-  out << "; peak " << short_number(peak)
-      << (peak_given ? " (given)" : " (largest nearest-neighbour distance in the reference)") << "]";
+  out << "; peak " << short_number(peak) << " (" << peak_source << ")]";
   return out.str();
 }
 
@@ -583,7 +583,9 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
   }
   result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
   result.score = *find_value(result.values, "d1_psnr");
-  result.text_note = text_note(result.values, options, peak, peak_given.has_value());
+  // The source the caller recorded: a mesh's peak is computed (the box diagonal), not given.
+  result.text_note =
+      text_note(result.values, options, peak, details.at("peak_source").get<std::string>());
 }
 
 void check_peak(const std::optional<double>& peak) {
@@ -767,9 +769,10 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   const std::optional<double> peak =
       options.peak ? static_cast<float>(*options.peak)
                    : static_cast<float>(box_diagonal(sa.positions));
-  details["peak_source"] =
-      options.peak ? "given" : "diagonal of the reference's sampled cloud's box (mmetric's "
-                               "--resolution 0)";
+  details["peak_source"] = options.peak
+                               ? "given"
+                               : "diagonal of the reference's sampled cloud's box, mmetric's "
+                                 "--resolution 0";
   const int dups = static_cast<int>(o.duplicates);
   const bool weighted = o.tied == TiedNeighbours::kWeightedAverage;
 

@@ -619,7 +619,7 @@ def _finite_array(name, a):
 
 
 def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, raw=None,
-             pairs=None, groups=None, lower_is_better=(), orientation="auto"):
+             pairs=None, groups=None, lower_is_better=(), orientation="auto", mapping=None):
     """Agreement of objective scores with subjective ones, as ``qm3d eval``.
 
     One metric (`scores` a sequence, no pair data): PLCC, SROCC, KROCC, PLCC and RMSE after the
@@ -634,7 +634,10 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
     label) triples of stimulus indices, label 1 = first better, -1 worse, 0 similar); `groups`
     (one value per stimulus) keeps the pairs within a group. Registered metrics' names (and their
     named values, e.g. ``d1_mse``) give their orientation; others are taken as qualities unless
-    named in `lower_is_better` (or `orientation` = "quality" / "distortion" for all).
+    named in `lower_is_better` (or `orientation` = "quality" / "distortion" for all). `mapping`
+    (as ``qm3d eval --mapping``: none, linear, cubic, logistic4, logistic5; default logistic4)
+    selects this protocol for one metric too; with none or linear 3 stimuli are enough (the
+    logistic needs 5).
 
     Args:
         scores: a sequence, or a dict / DataFrame of sequences, of the same length as `mos`.
@@ -653,7 +656,7 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
     if c.size not in (0, m.size):
         raise ValueError(f"ci95: {c.size} values for {m.size} stimuli")
     several = isinstance(scores, dict) or hasattr(scores, "columns")
-    if not several and sd is None and raw is None and pairs is None:
+    if not several and sd is None and raw is None and pairs is None and mapping is None:
         s = _finite_array("scores", _np.asarray(scores, dtype=float).ravel())
         if s.size != m.size:
             raise ValueError(f"scores and mos: {s.size} scores but {m.size} MOS values")
@@ -688,6 +691,8 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
         for k, (a, b, l) in enumerate(pairs):
             if not (0 <= int(a) < m.size and 0 <= int(b) < m.size) or int(l) not in (-1, 0, 1):
                 raise ValueError(f"pairs[{k}]: stimulus indices 0..{m.size - 1} and a label -1, 0 or 1 needed")
+            if int(a) == int(b):
+                raise ValueError(f"pairs[{k}]: stimulus {int(a)} is paired with itself")
             first.append(int(a)); second.append(int(b)); label.append(int(l))
         labels = "pairs"
     g = [str(x) for x in groups] if groups is not None else []
@@ -695,9 +700,14 @@ def evaluate(scores, mos, ci95=None, bootstrap=1000, seed=1, sd=None, n=None, ra
         raise ValueError(f"groups: {len(g)} values for {m.size} stimuli")
     if orientation not in ("auto", "quality", "distortion"):
         raise ValueError("orientation: auto, quality or distortion")
+    unknown = [str(x) for x in lower_is_better if str(x) not in names]
+    if unknown:
+        raise ValueError(f"lower_is_better: {', '.join(unknown)}: no such metric "
+                         f"(the metrics: {', '.join(names)})")
     return _json.loads(_qm3d.evaluate_metrics(
         names, series, [str(x) for x in lower_is_better], orientation, m.tolist(), c.tolist(),
-        labels, sdv, nv, rawv, first, second, label, g, int(bootstrap), int(seed)))
+        labels, sdv, nv, rawv, first, second, label, g, int(bootstrap), int(seed),
+        "logistic4" if mapping is None else str(mapping)))
 
 
 def load_model(path):

@@ -10,7 +10,10 @@ Example::
 
 Each pair (or each metric of a pair, for metric="compare") is one Dask task. A pair that fails
 gives a row with status "error" and its message, never a lost batch; a task lost with a dying
-worker is run again by Dask, so every row is there exactly once.
+worker is run again by Dask, so every row is there exactly once. A pair that takes down every
+worker that runs it (a crash, or the nanny killing the worker over its memory limit, on
+``distributed.scheduler.allowed-failures`` + 1 workers) is its own error row too, as in
+``qm3d batch``: the other pairs' rows are kept.
 """
 
 import math
@@ -88,6 +91,30 @@ def _pairs_of(pairs, metric):
     return out
 
 
+def _lost_pair_row(reference, distorted, metric, error):
+    """The error row of a task Dask gave up on: its workers died running it (KilledWorker), or
+    it was cancelled or lost with the cluster."""
+    why = f"{type(error).__name__}: {error}"
+    if type(error).__name__ == "KilledWorker":
+        why = ("the worker scoring this pair died each time (killed over its memory limit, or "
+               "crashed); " + why)
+    return _error_row(reference, distorted, metric, why)
+
+
+def _gather_rows(futures, work):
+    """Every task's rows in pair order; a task that failed as a whole is its pair's error row
+    (client.gather would raise at the first one and lose every other row)."""
+    from distributed import wait
+    wait(futures)
+    rows = []
+    for future, (reference, distorted, metric) in zip(futures, work):
+        try:
+            rows.extend(future.result())
+        except Exception as e:  # KilledWorker, CancelledError ...: _score_pair itself never raises
+            rows.append(_lost_pair_row(reference, distorted, metric, e))
+    return rows
+
+
 def score_pairs(pairs, client=None, metric="auto", **options):
     """Scores every pair as Dask tasks and returns batch's rows as a DataFrame, in pair order.
 
@@ -124,7 +151,7 @@ def score_pairs(pairs, client=None, metric="auto", **options):
     try:
         futures = client.map(_score_pair, [w[0] for w in work], [w[1] for w in work],
                              [w[2] for w in work], [options] * len(work), pure=False)
-        rows = [row for pair_rows in client.gather(futures) for row in pair_rows]
+        rows = _gather_rows(futures, work)
     finally:
         if own is not None:
             cluster = own.cluster

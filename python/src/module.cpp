@@ -594,11 +594,12 @@ PYBIND11_MODULE(_qm3d, m) {
       "evaluate_metrics",
       [](const std::vector<std::string>& names, const std::vector<std::vector<double>>& scores,
          const std::vector<std::string>& lower_is_better, const std::string& orientation,
-         const std::vector<double>& mos, const std::vector<double>& ci95,
-         const std::string& labels, const std::vector<double>& sd, const std::vector<double>& n,
+         const std::vector<double>& mos, const std::vector<double>& ci95, const std::string& labels,
+         const std::vector<double>& sd, const std::vector<double>& n,
          const std::vector<std::vector<double>>& raw, const std::vector<std::size_t>& first,
          const std::vector<std::size_t>& second, const std::vector<int>& label,
-         const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed) {
+         const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed,
+         const std::string& mapping) {
         std::vector<MetricScores> metrics;
         for (std::size_t i = 0; i < names.size(); ++i) {
           MetricScores ms{names[i], scores.at(i), true, ""};
@@ -630,6 +631,7 @@ PYBIND11_MODULE(_qm3d, m) {
         ProtocolOptions o;
         o.evaluation.bootstrap = bootstrap;
         o.evaluation.seed = seed;
+        o.mapping = parse_mapping(mapping);
         nlohmann::ordered_json j;
         {
           py::gil_scoped_release release;
@@ -640,7 +642,7 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("names"), py::arg("scores"), py::arg("lower_is_better"), py::arg("orientation"),
       py::arg("mos"), py::arg("ci95"), py::arg("labels"), py::arg("sd"), py::arg("n"),
       py::arg("raw"), py::arg("first"), py::arg("second"), py::arg("label"), py::arg("groups"),
-      py::arg("bootstrap"), py::arg("seed"));
+      py::arg("bootstrap"), py::arg("seed"), py::arg("mapping") = "logistic4");
 
   // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
   // finish their current stage on their own threads; they must be gone before Python is.

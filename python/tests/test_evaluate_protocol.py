@@ -73,7 +73,7 @@ def test_raw_scores_and_given_pairs():
     assert r["krasula"]["pairs"] == 25
     given = qm3d.evaluate({"a": a, "b": b}, mos, bootstrap=0,
                           pairs=[(i, j, 1 if mos[i] > mos[j] + 1 else -1 if mos[j] > mos[i] + 1 else 0)
-                                 for i in range(5) for j in range(5)])
+                                 for i in range(5) for j in range(5) if i != j])
     assert given["krasula"]["rule"] == "given"
     with pytest.raises(ValueError, match="pairs"):
         qm3d.evaluate({"a": a}, mos, pairs=[(0, 7, 1)])
@@ -107,3 +107,30 @@ def test_bad_subjective_data():
         qm3d.evaluate(scores, mos, sd=sd, n=n, raw=[[1, 2]] * 168, bootstrap=0)
     with pytest.raises(ValueError, match="NaN"):
         qm3d.evaluate(scores, mos, sd=[math.nan] * 168, n=n, bootstrap=0)
+
+
+def test_vmafs_four_stimuli_without_the_logistic():
+    # VMAF's own raw-score tests have 4 stimuli: enough for correlations and Krasula's analysis
+    # with a mapping of 2 parameters or none; the logistic (and the one-metric default) needs 5.
+    table = rows("vmaf_rawscore_vector.csv")
+    raw = [[float(r[f"score{k}"]) for k in range(1, 11)] for r in table]
+    a = [float(r["prediction_a"]) for r in table]
+    b = [float(r["prediction_b"]) for r in table]
+    mos = [sum(x) / len(x) for x in raw]
+    for mapping in ("none", "linear"):
+        r = qm3d.evaluate({"a": a, "b": b}, mos, raw=raw, bootstrap=0, mapping=mapping)
+        assert r["stimuli"] == 4 and r["krasula"]["pairs"] == 16
+        assert r["metrics"]["a"]["mapping"]["name"] == mapping
+    one = qm3d.evaluate(a, mos, bootstrap=0, mapping="linear")
+    assert one["stimuli"] == 4
+    with pytest.raises(ValueError, match="at least 5"):
+        qm3d.evaluate(a, mos, bootstrap=0)
+
+
+def test_a_typo_and_a_self_pair_are_refused():
+    mos = [1.0, 2.0, 2.9, 4.1, 4.8, 3.3]
+    scores = {"psnr": [20.0, 25.0, 29.0, 36.0, 41.0, 31.0], "other": [5, 4, 3, 2, 1, 2.5]}
+    with pytest.raises(ValueError, match="lower_is_better: othr: no such metric"):
+        qm3d.evaluate(scores, mos, bootstrap=0, lower_is_better=["othr"])
+    with pytest.raises(ValueError, match="paired with itself"):
+        qm3d.evaluate(scores, mos, bootstrap=0, pairs=[(0, 1, -1), (2, 2, 0), (3, 1, 1)])

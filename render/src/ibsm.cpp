@@ -11,6 +11,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <ostream>
 #include <stdexcept>
 
 #include "qm3d/common/error.h"
@@ -104,12 +105,13 @@ IbsmView compare_views(const View& a, const View& b, const Float3& direction, bo
   return out;
 }
 
+/// Written as every other output (write_file_atomically): a full disk or a write error leaves
+/// no empty or truncated PNG behind and fails naming the file.
 void write_png(const std::filesystem::path& path, const View& v) {
-  // Rows bottom first in memory: written from the last row up (mmetric writes them flipped too).
-  const std::uint8_t* last_row = v.rgba.data() + static_cast<std::size_t>(v.width) * 4 * (v.height - 1);
-  if (!stbi_write_png(path.string().c_str(), v.width, v.height, 4, last_row, -v.width * 4)) {
-    throw InputError(path.string() + ": cannot write PNG");
-  }
+  const std::vector<std::uint8_t> png = png_bytes(v);
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  });
 }
 
 std::string view_file(int index, const char* which) {

@@ -297,9 +297,23 @@ TEST(Merge, ANonNumberScoreWithStatusOkIsAnErrorRow) {
                     {file("OUT_0.csv", {row("a", "cmdm", "garbage"), row("b", "cmdm", "")})});
   ASSERT_EQ(m.rows.size(), 2u);
   ASSERT_EQ(m.failed.size(), 2u);
-  EXPECT_EQ(m.rows[0],
-            "a,d.ply,cmdm,,error,\"merge: status ok but the score \"\"garbage\"\" is not a finite "
-            "number (OUT_0.csv:2)\",1.5,0.25");
+  EXPECT_EQ(
+      m.rows[0],
+      "a,d.ply,cmdm,,error,\"merge: status ok but the score \"\"garbage\"\" is not a score (a "
+      "finite number or inf) (OUT_0.csv:2)\",1.5,0.25");
+}
+
+// What batch writes is kept: "inf" (PSNR of identical inputs, issue 37); nan and -inf never are.
+TEST(Merge, AnInfScoreIsKeptNanAndMinusInfAreErrors) {
+  const MergeResult m = merge_results(
+      keys({{"a", "psnr"}, {"b", "psnr"}, {"c", "psnr"}}),
+      {file("OUT_0.csv",
+            {row("a", "psnr", "inf"), row("b", "psnr", "nan"), row("c", "psnr", "-inf")})});
+  ASSERT_EQ(m.rows.size(), 3u);
+  EXPECT_EQ(m.rows[0], row("a", "psnr", "inf"));
+  ASSERT_EQ(m.failed.size(), 2u);
+  EXPECT_NE(m.rows[1].find("\"\"nan\"\" is not a score"), std::string::npos) << m.rows[1];
+  EXPECT_NE(m.rows[2].find("\"\"-inf\"\" is not a score"), std::string::npos) << m.rows[2];
 }
 
 TEST(Merge, RowsScoredWithOtherSettingsAreRefused) {

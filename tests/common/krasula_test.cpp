@@ -155,8 +155,8 @@ TEST(Krasula, LabelsFromMosSdAndNAreTheVmafVectors) {
   const VmafVector& v = vmaf_vector();
   ASSERT_EQ(pairs.size(), v.labels.size());
   for (std::size_t p = 0; p < pairs.size(); ++p) {
-    ASSERT_EQ(pairs.first[p], v.first[p]) << "pair " << p + 1;
-    ASSERT_EQ(pairs.second[p], v.second[p]) << "pair " << p + 1;
+    ASSERT_EQ(pairs.first(p), v.first[p]) << "pair " << p + 1;
+    ASSERT_EQ(pairs.second(p), v.second[p]) << "pair " << p + 1;
     ASSERT_EQ(pairs.label[p], v.labels[p]) << "pair " << p + 1;
   }
   expect_vmaf_per_metric_and_pairwise(krasula_analysis(scores, pairs));
@@ -240,8 +240,8 @@ TEST(Krasula, GroupsKeepPairsWithinASource) {
   EXPECT_EQ(all.size(), 6u);
   const PairLabels within = label_pairs_j149(mos, sd, n, {"a", "b", "a", "b"});
   ASSERT_EQ(within.size(), 2u);
-  EXPECT_EQ(within.first[0], 2u);
-  EXPECT_EQ(within.second[0], 0u);
+  EXPECT_EQ(within.first(0), 2u);
+  EXPECT_EQ(within.second(0), 0u);
   EXPECT_EQ(within.label[0], 1);
 }
 

@@ -99,6 +99,10 @@ struct EvaluationOptions {
   /// Coverage of the percentile intervals.
   double confidence = 0.95;
   LogisticFitOptions fit;
+  /// True: fewer than 5 stimuli (too few for the logistic fit) is an error. False (the
+  /// evaluation protocol, which maps with its own function): from 3 stimuli on, the
+  /// correlations alone, the logistic statistics NaN without interval.
+  bool require_logistic = true;
 };
 
 /// A confidence interval: percentile bootstrap here, analytic in p1401.h.

@@ -15,8 +15,9 @@ namespace qm3d::pointcloud {
 ///   keep their exact value); colours uchar, ushort or float named red/green/blue, r/g/b or
 ///   diffuse_red/green/blue (see qm3d/common/ply.h). Faces, normals and alpha are ignored.
 /// - `.pcd`: ascii, binary or binary_compressed; fields x, y, z (float or double) and a packed
-///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB), each of COUNT 1
-///   (other fields may have any COUNT: a field of COUNT n takes n ASCII columns). An ASCII line
+///   `rgb` or `rgba` field (float or uint32 holding 0x00RRGGBB / 0xAARRGGBB; without one, no
+///   colours, as a colourless PLY: read_cloud refuses it, psnr --no-color takes it), each of COUNT
+///   1 (other fields may have any COUNT: a field of COUNT n takes n ASCII columns). An ASCII line
 ///   with a value too many or too few, data beyond POINTS or fewer points than it, a binary file
 ///   whose size is not POINTS records, compressed data whose sizes disagree with POINTS or whose
 ///   LZF stream is corrupt are FormatErrors naming the file (and the line). Points with a NaN or
