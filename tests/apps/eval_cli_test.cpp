@@ -14,8 +14,8 @@
 #include <sstream>
 
 #include "qm3d/common/evaluation.h"
-#include "qm3d/common/pooling.h"
 #include "cli_runner.h"
+#include "qm3d/common/pooling.h"
 #include "test_paths.h"
 
 namespace qm3d {
@@ -164,10 +164,21 @@ TEST_F(EvalCli, StemMatchesBatchPathsToStimulusNames) {
                                "/r/a.ply,/d/s5.ply,pcqm,0.5,ok\n/r/a.ply,/d/s6.ply,pcqm,0.6,ok\n");
   const fs::path mos =
       file("mos.csv", "name,MOS\ns1,4.9\ns2,4.1\ns3,3.2\ns4,3\ns5,1.5\ns6,1.1\ns7,2\n");
-  const CliRun plain = qm3d("eval " + scores.string() + " " + mos.string());
-  EXPECT_EQ(plain.code, 2);
-  EXPECT_NE(plain.err.find("no stimulus in common"), std::string::npos) << plain.err;
-  EXPECT_NE(plain.err.find("try --stem"), std::string::npos) << plain.err;
+  // No key matches whole: matched by file stem, with a note saying so.
+  const CliRun plain = qm3d("eval " + scores.string() + " " + mos.string() + " --json");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_NE(plain.err.find("matching them by file stem (as --stem)"), std::string::npos)
+      << plain.err;
+  EXPECT_EQ(json::parse(plain.out)["stimuli"], 5);
+  EXPECT_EQ(json::parse(plain.out)["key_match"], "file stem");
+  // Nothing matches either way: the error shows one key of each side and names --stem.
+  const fs::path other = file("other.csv", "name,MOS\nx1,4.9\nx2,4.1\n");
+  const CliRun none = qm3d("eval " + scores.string() + " " + other.string());
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("(key \"distorted\", e.g. \"/d/s1.ply\")"), std::string::npos)
+      << none.err;
+  EXPECT_NE(none.err.find("(key \"name\", e.g. \"x1\")"), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("--stem"), std::string::npos) << none.err;
   const CliRun r =
       qm3d("eval " + scores.string() + " " + mos.string() + " --stem --json --bootstrap 20");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -310,6 +321,40 @@ void expect_toyama_vmaf_values(const json& j) {
 }
 
 TEST_F(EvalCli, KrasulaOnTheToyamaVectorsFromMosSdAndN) {
+// "Is the MOS column a DMOS?" only on evidence: every metric of known orientation clearly ranks
+// the stimuli the other way. One metric correlating poorly, or one among others that agree, is
+// no reason.
+TEST_F(EvalCli, DmosWarningOnlyWhenEveryOrientedMetricDisagrees) {
+  const double mos_values[] = {1.1, 1.9, 2.6, 3.2, 3.8, 4.4, 4.9, 2.2};
+  const double weak_psnr[] = {30, 29, 33, 24, 31, 26, 24.5, 28};  // SROCC -0.43: poor
+  std::string weak = "reference,distorted,metric,score,status\n";
+  std::string both = weak, one = weak, mos = "distorted,mos\n";
+  for (int k = 0; k < 8; ++k) {
+    const std::string d = "r.ply,s" + std::to_string(k) + ".ply,";
+    weak += d + "psnr," + exact(weak_psnr[k]) + ",ok\n";
+    // A DMOS-like MOS: the PSNR falls and the CMDM rises as the MOS rises.
+    both += d + "psnr," + exact(40 - 2 * mos_values[k]) + ",ok\n";
+    both += d + "cmdm," + exact(0.1 * mos_values[k]) + ",ok\n";
+    one += d + "psnr," + exact(20 + 2 * mos_values[k]) + ",ok\n";
+    one += d + "cmdm," + exact(0.1 * mos_values[k]) + ",ok\n";
+    mos += "s" + std::to_string(k) + ".ply," + exact(mos_values[k]) + "\n";
+  }
+  const fs::path m = file("mos.csv", mos);
+  const std::string opts = " --bootstrap 0 --json";
+  const CliRun poor = qm3d("eval " + file("weak.csv", weak).string() + " " + m.string() + opts);
+  ASSERT_EQ(poor.code, 0) << poor.err;
+  EXPECT_EQ(poor.err.find("DMOS"), std::string::npos) << poor.err;
+  const CliRun mixed = qm3d("eval " + file("one.csv", one).string() + " " + m.string() + opts);
+  ASSERT_EQ(mixed.code, 0) << mixed.err;
+  EXPECT_EQ(mixed.err.find("DMOS"), std::string::npos) << mixed.err;
+  const CliRun dmos = qm3d("eval " + file("both.csv", both).string() + " " + m.string() + opts);
+  ASSERT_EQ(dmos.code, 0) << dmos.err;
+  EXPECT_NE(dmos.err.find("every metric of known orientation ranks the stimuli the other way"),
+            std::string::npos)
+      << dmos.err;
+  EXPECT_NE(dmos.err.find("is the MOS column a DMOS"), std::string::npos) << dmos.err;
+}
+
   const std::string table = (evaluation_dir() / "toyama_stimuli_5metrics.csv").string();
   const CliRun r = qm3d("eval " + table + " " + table +
                         " --scores-key stimulus --scores-column m1,m2,m3,m4,m5 --mos-column MOS "
@@ -555,7 +600,7 @@ TEST_F(EvalCli, SvgPlotAndPngThroughGnuplot) {
   for (auto p = text.find("<circle"); p != std::string::npos; p = text.find("<circle", p + 1))
     ++circles;
   EXPECT_EQ(circles, 1140u);
-  // PNG: drawn by gnuplot when it is installed; a clear error when it is not.
+  // PNG: drawn by qm3d itself (no gnuplot on the PATH needed), the same size as the SVG.
   const fs::path png = dir_ / "io" / "plot.png";
   const CliRun none = qm3d(args + " --plot " + png.string(), "PATH=/nonexistent");
   EXPECT_EQ(none.code, 2);
