@@ -413,7 +413,8 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_flag("--csv", o.csv, "Write CSV: statistic,value,ci95_low,ci95_high")->excludes(json);
   cmd->add_option("-o,--output", o.output, "Write to FILE instead of stdout")->type_name("FILE");
   cmd->add_option("--plot", o.plot,
-                  "Also draw score vs MOS with the fitted logistic (.svg; .png needs gnuplot)")
+                  "Also draw score vs MOS with the fitted mapping (and with Krasula's analysis "
+                  "FILE-auc: the AUCs); .svg or .png")
       ->type_name("FILE.svg|png");
 }
 

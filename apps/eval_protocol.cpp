@@ -387,7 +387,7 @@ std::string file_part(const std::string& name) {
 }
 
 // --plot FILE.svg|png: FILE-NAME.svg|png, a scatter per metric, and with Krasula's analysis
-// FILE-auc.svg, the AUC summary (always SVG).
+// FILE-auc.svg|png, the AUC summary.
 void plot_protocol(const std::string& path, const std::vector<MetricScores>& metrics,
                    const SubjectiveData& subjective, const ProtocolResult& r,
                    const ordered_json& j, const std::string& mos_label) {
