@@ -78,7 +78,7 @@ std::vector<std::size_t> numeric_columns(const CsvTable& t, std::size_t key) {
   for (std::size_t c = 0; c < t.header.size(); ++c) {
     const std::string& h = t.header[c];
     if (c == key || h == "reference" || h == "distorted" || h == "metric" || h == "status" ||
-        h == "error" || h == "seconds" || h == "settings" ||
+        h == "error" || h == "seconds" || h == "settings" || h == "warnings" ||
         h.find("bbox_max_side") != std::string::npos) {
       continue;
     }
