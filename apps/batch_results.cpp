@@ -313,6 +313,19 @@ std::string tidy_results(const std::string& text, const std::vector<RowKey>& ord
   return out;
 }
 
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order) {
+  const std::vector<std::string> header = csv_split(text.substr(0, text.find('\n')));
+  const std::size_t fixed = csv_split(csv_header()).size();
+  // batch_header(names): the fixed columns, the names, their two directions, settings.
+  if (header.size() <= fixed || header.back() != "settings" || (header.size() - fixed - 1) % 3) {
+    return text;
+  }
+  const auto first = header.begin() + static_cast<std::ptrdiff_t>(fixed);
+  const std::vector<std::string> names(
+      first, first + static_cast<std::ptrdiff_t>((header.size() - fixed - 1) / 3));
+  return tidy_results(text, order, names);
+}
+
 std::size_t count_error_rows(const std::string& text) {
   std::istringstream in(text);
   std::string line;

@@ -80,6 +80,9 @@ ResumeState read_resume(const std::string& text, const std::string& file,
 std::string tidy_results(const std::string& text, const std::vector<RowKey>& order,
                          const std::vector<std::string>& value_names);
 
+/// The same, the value names read from the text's header (`qm3d merge`'s output).
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order);
+
 /// The number of rows of a results text whose status is not "ok".
 std::size_t count_error_rows(const std::string& text);
 

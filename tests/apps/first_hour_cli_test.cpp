@@ -145,6 +145,34 @@ TEST_F(FirstHour, BatchResultsHaveTheRunsColumnsInListOrder) {
   EXPECT_EQ(slurp(out), results);
 }
 
+// Shards keep the full header (merge requires one header); the merged file is tidy.
+TEST_F(FirstHour, MergedShardsAreTidyToo) {
+  const fs::path list = dir_ / "list.csv";
+  std::ofstream(list) << "reference,distorted,metric\n"
+                      << mesh("blob3_ref.off") << "," << mesh("blob3_geonoise.off") << ",cmdm\n"
+                      << mesh("blob3_ref.off") << "," << mesh("blob3_colnoise.off") << ",compare\n";
+  std::string shards;
+  for (int k = 0; k < 2; ++k) {
+    const fs::path out = dir_ / ("shard" + std::to_string(k) + ".csv");
+    ASSERT_EQ(qm3d("batch " + list.string() + " -o " + out.string() + " -q --shard " +
+                   std::to_string(k) + "/2")
+                  .code,
+              0);
+    EXPECT_TRUE(header_of(slurp(out)) == header_of(slurp(dir_ / "shard0.csv")));
+    shards += " " + out.string();
+  }
+  const fs::path merged = dir_ / "merged.csv";
+  const CliRun m =
+      qm3d("merge --list " + list.string() + shards + " -o " + merged.string() + " -q");
+  ASSERT_EQ(m.code, 0) << m.err;
+  const auto header = header_of(slurp(merged));
+  EXPECT_LT(header.size(), header_of(slurp(dir_ / "shard0.csv")).size());
+  EXPECT_EQ(std::count(header.begin(), header.end(), "d1_mse"), 0);
+  const auto rows = lines_of(slurp(merged));
+  ASSERT_GE(rows.size(), 3u);
+  EXPECT_NE(rows[1].find("blob3_geonoise"), std::string::npos);
+}
+
 // The warnings column holds each row's count of warnings and the first one, as `--json` has them.
 TEST_F(FirstHour, BatchWarningsColumnHasTheCountAndFirstMessage) {
   const std::string ref =
