@@ -389,7 +389,7 @@ std::set<RowKey> prepare_output(LockedResults& out, const BatchOptions& o,
       text.resize(complete);
     }
     state = read_resume(text, o.output.string(), settings, o.retry_failed, o.value_names);
-    if (state.retried > 0) out.replace(state.kept_text);
+    if (state.retried > 0 || state.widened) out.replace(state.kept_text);
   } else if (existed) {
     out.truncate();  // --overwrite
   }
@@ -543,18 +543,24 @@ int run_batch(const BatchOptions& options) {
   LockedResults out(o.output);
   std::set<RowKey> done = prepare_output(out, o, settings, exists);
   std::vector<std::pair<ListPair, std::string>> todo;
-  std::size_t rows = 0;  // (pair, metric) rows the list asks for
+  std::vector<RowKey> order;  // (pair, metric) rows the list asks for, in its order
   for (const ListPair& p : pairs) {
     for (const std::string& metric : batch_metrics(p, o.list)) {
-      ++rows;
-      if (done.insert({p.reference, p.distorted, metric}).second) todo.emplace_back(p, metric);
+      order.emplace_back(p.reference, p.distorted, metric);
+      if (done.insert(order.back()).second) todo.emplace_back(p, metric);
     }
   }
-  if (!o.quiet && todo.size() < rows) {
-    std::cerr << "batch: " << rows - todo.size() << " pairs already done, "
-              << todo.size() << " to go\n";
+  if (!o.quiet && todo.size() < order.size()) {
+    std::cerr << "batch: " << order.size() - todo.size() << " pairs already done, " << todo.size()
+              << " to go\n";
   }
-  return finish(o, score_jobs(o, todo, out, settings));
+  const ScoringSummary run = score_jobs(o, todo, out, settings);
+  // The final file for reading: list order, the value columns of the metrics it has. Shards
+  // keep the full header, which `qm3d merge` requires of every shard.
+  if (out.is_regular() && !o.shard) {
+    out.replace(tidy_results(read_file_bytes(o.output), order, o.value_names));
+  }
+  return finish(o, run);
 }
 
 void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
@@ -90,20 +91,51 @@ bool row_failed(const std::vector<std::string>& fields) {
   return fields.size() > kStatusColumn && fields[kStatusColumn] != "ok";
 }
 
-// The header check of read_resume.
-void check_header(const std::string& line, const std::string& file,
+// The fields of `line` (under `from`) in the columns `to`, matched by name; a column `from`
+// lacks is empty.
+std::string remap_row(const std::vector<std::string>& fields, const std::vector<std::string>& from,
+                      const std::vector<std::string>& to) {
+  std::string row;
+  for (std::size_t c = 0; c < to.size(); ++c) {
+    const auto it = std::find(from.begin(), from.end(), to[c]);
+    const std::size_t k = static_cast<std::size_t>(it - from.begin());
+    row += (c ? "," : "") + (it != from.end() && k < fields.size() ? csv_field(fields[k]) : "");
+  }
+  return row;
+}
+
+// Whether `header` is batch_header(value_names) with some value columns left out (a results
+// file tidy_results() wrote at the end of a batch).
+bool is_tidy_header(const std::vector<std::string>& header, const std::vector<std::string>& full) {
+  const std::size_t fixed = csv_split(csv_header()).size();
+  if (header.size() <= fixed || header.size() > full.size() || header.back() != "settings" ||
+      !std::equal(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(fixed),
+                  header.begin())) {
+    return false;
+  }
+  for (const std::string& h : header) {
+    if (std::find(full.begin(), full.end(), h) == full.end()) return false;
+  }
+  return true;
+}
+
+// The header check of read_resume: true when the file is a tidy one, whose rows are to be
+// widened to the full header.
+bool check_header(const std::string& line, const std::string& file,
                   const std::vector<std::string>& value_names) {
-  if (line == batch_header(value_names)) return;
-  if (line == csv_header()) {
+  if (line == batch_header(value_names)) return false;
+  if (is_tidy_header(csv_split(line), csv_split(batch_header(value_names)))) return true;
+  const std::string fixed = "reference,distorted,metric,score,status,error,seconds,";
+  if (line.rfind(fixed, 0) == 0 && line.find(",settings") == std::string::npos) {
     throw InputError(file +
                      ": written by an older qm3d (no settings column), so its settings cannot "
                      "be checked: finish it with that version, or start again with --overwrite");
   }
-  if (line.rfind(csv_header(), 0) == 0) {
+  if (line.rfind(fixed, 0) == 0) {
     throw InputError(file +
                      ": its columns are not this batch's (the list's metrics report other "
-                     "named values, e.g. psnr was added or removed): resume with the same list, "
-                     "or write to another -o");
+                     "named values, e.g. psnr was added or removed, or an older qm3d wrote it): "
+                     "resume with the same list and version, or write to another -o");
   }
   throw InputError(file +
                    ": not a qm3d batch results file (its first line is not the header qm3d "
@@ -216,20 +248,22 @@ ResumeState read_resume(const std::string& text, const std::string& file,
   ResumeState state;
   std::istringstream in(text);
   std::string line;
-  const std::size_t settings_column = csv_split(batch_header(value_names)).size() - 1;
+  const std::vector<std::string> full = csv_split(batch_header(value_names));
+  std::vector<std::string> header;
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (!state.has_header) {
-      check_header(line, file, value_names);
+      state.widened = check_header(line, file, value_names);
+      header = csv_split(line);
       state.has_header = true;
-      state.kept_text += line + "\n";
+      state.kept_text += batch_header(value_names) + "\n";
       continue;
     }
     const auto f = csv_split(line);
-    if (f.size() <= settings_column) continue;  // not a row (a blank line)
-    if (f[settings_column] != settings) {
+    if (f.size() < header.size()) continue;  // not a row (a blank line)
+    if (f.back() != settings) {
       throw InputError(file + ": scored with other settings (" +
-                       settings_difference(f[settings_column], settings, file) +
+                       settings_difference(f.back(), settings, file) +
                        "): resume with the same options, or write to another -o");
     }
     if (retry_failed && row_failed(f)) {
@@ -237,9 +271,59 @@ ResumeState read_resume(const std::string& text, const std::string& file,
       continue;
     }
     state.done.emplace(f[0], f[1], f[2]);
-    state.kept_text += line + "\n";
+    state.kept_text += (state.widened ? remap_row(f, header, full) : line) + "\n";
   }
   return state;
+}
+
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order,
+                         const std::vector<std::string>& value_names) {
+  std::istringstream in(text);
+  std::string line;
+  if (!std::getline(in, line)) return text;
+  const std::vector<std::string> header = csv_split(line);
+  std::map<RowKey, std::size_t> rank;
+  for (const RowKey& k : order) rank.emplace(k, rank.size());
+  std::set<std::string> metrics;
+  std::vector<std::pair<std::size_t, std::vector<std::string>>> rows;  // (rank, fields)
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    auto f = csv_split(line);
+    if (f.size() < header.size()) continue;
+    const auto it = rank.find({f[0], f[1], f[2]});
+    rows.emplace_back(it == rank.end() ? order.size() : it->second, std::move(f));
+    metrics.insert(rows.back().second[2]);
+  }
+  // stable: rows outside `order` keep their file order, after the others.
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::set<std::string> used;
+  for (const std::string& m : metrics) {
+    if (const MetricSpec* spec = registry().find(m)) {
+      used.insert(spec->value_names.begin(), spec->value_names.end());
+    }
+  }
+  std::vector<std::string> kept;
+  for (const std::string& n : value_names) {
+    if (used.count(n)) kept.push_back(n);
+  }
+  const std::vector<std::string> to = csv_split(batch_header(kept));
+  std::string out = batch_header(kept) + "\n";
+  for (const auto& row : rows) out += remap_row(row.second, header, to) + "\n";
+  return out;
+}
+
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order) {
+  const std::vector<std::string> header = csv_split(text.substr(0, text.find('\n')));
+  const std::size_t fixed = csv_split(csv_header()).size();
+  // batch_header(names): the fixed columns, the names, their two directions, settings.
+  if (header.size() <= fixed || header.back() != "settings" || (header.size() - fixed - 1) % 3) {
+    return text;
+  }
+  const auto first = header.begin() + static_cast<std::ptrdiff_t>(fixed);
+  const std::vector<std::string> names(
+      first, first + static_cast<std::ptrdiff_t>((header.size() - fixed - 1) / 3));
+  return tidy_results(text, order, names);
 }
 
 std::size_t count_error_rows(const std::string& text) {

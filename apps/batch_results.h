@@ -63,6 +63,7 @@ struct ResumeState {
   std::string kept_text;    ///< the file without the rows to score again (--retry-failed)
   std::size_t retried = 0;  ///< error rows dropped for scoring again
   bool has_header = false;  ///< false: the file is empty
+  bool widened = false;     ///< a tidy file (tidy_results()): kept_text has the full header
 };
 
 /// Reads `text`, the content of `file` (a trailing partial line already cut). @throws
@@ -71,6 +72,16 @@ struct ResumeState {
 ResumeState read_resume(const std::string& text, const std::string& file,
                         const std::string& settings, bool retry_failed,
                         const std::vector<std::string>& value_names = {});
+
+/// The results text tidied for reading at the end of a batch: its rows in `order` (the list's
+/// (pair, metric) order; rows not in it after those, in file order), and of the named-value
+/// columns of `value_names` only those of the metrics its rows name. read_resume() widens such
+/// a file back to the full header.
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order,
+                         const std::vector<std::string>& value_names);
+
+/// The same, the value names read from the text's header (`qm3d merge`'s output).
+std::string tidy_results(const std::string& text, const std::vector<RowKey>& order);
 
 /// The number of rows of a results text whose status is not "ok".
 std::size_t count_error_rows(const std::string& text);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "eval_plot.h"
@@ -44,21 +45,44 @@ struct EvalData {
   std::string orientation_source;  ///< "--orientation", "metric column: psnr", or empty
 };
 
-bool looks_like_paths(const KeyList& keys) {
-  for (const std::string& k : keys.first) {
-    if (k.find('/') != std::string::npos || k.find('.') != std::string::npos) return true;
+// The distinct non-empty keys of a column, whole or by file stem (a batch file names a stimulus
+// once per metric: a set, not join_on_key, which refuses repeated keys).
+std::set<std::string> key_set(const CsvTable& t, std::size_t column, bool by_stem) {
+  std::set<std::string> keys;
+  for (const auto& row : t.rows) {
+    if (column < row.size() && !row[column].empty()) {
+      keys.insert(by_stem ? stem_of(row[column]) : row[column]);
+    }
+  }
+  return keys;
+}
+
+bool any_common(const std::set<std::string>& a, const std::set<std::string>& b) {
+  for (const std::string& k : a) {
+    if (b.count(k)) return true;
   }
   return false;
 }
 
-void check_something_joined(const EvalData& d, bool stem) {
+// Whether the keys of SCORES and MOS must be compared by file stem: --stem, or automatically
+// when no key matches whole but some match by stem (batch paths against stimulus names; said in
+// a note).
+bool match_by_stem(const CsvTable& scores, const EvalCommandOptions& o, bool quiet) {
+  const CsvTable mos = read_csv_table(o.mos);
+  const std::size_t sk = key_column(scores, o.scores_key, "--scores-key");
+  const std::size_t mk = o.mos_key.empty() ? 0 : require_column(mos, o.mos_key, "--mos-key");
+  if (!o.stem && any_common(key_set(scores, sk, false), key_set(mos, mk, false))) return false;
+  const bool by_stem = any_common(key_set(scores, sk, true), key_set(mos, mk, true));
+  if (by_stem && !o.stem && !quiet) {
+    std::cerr << "qm3d: note: no key of " << scores.path << " equals one of " << mos.path
+              << "; matching them by file stem (as --stem)\n";
+  }
+  return by_stem || o.stem;  // none matching either way: said where the rows are joined
+}
+
+void check_something_joined(const EvalData& d) {
   if (!d.join.keys.empty()) return;
-  const bool hint =
-      !stem && (looks_like_paths(d.join.left_only) || looks_like_paths(d.join.right_only));
-  throw FormatError("no stimulus in common between " + d.scores_table.path + " (key \"" +
-                    d.scores_table.header[d.scores_key] + "\") and " + d.mos_table.path +
-                    " (key \"" + d.mos_table.header[d.mos_key] + "\")" +
-                    (hint ? "; the keys look like file paths: try --stem" : ""));
+  throw FormatError(no_common_key(d.scores_table, d.scores_key, d.mos_table, d.mos_key));
 }
 
 void collect_values(EvalData& d) {
@@ -138,7 +162,7 @@ EvalData load_eval_data(const EvalCommandOptions& o, CsvTable scores) {
   d.mos_value = value_column(d.mos_table, o.mos_column, {"mos"}, d.mos_key, "--mos-column");
   if (!o.ci_column.empty()) d.ci = require_column(d.mos_table, o.ci_column, "--ci-column");
   d.join = join_on_key(d.scores_table, d.scores_key, d.mos_table, d.mos_key, o.stem);
-  check_something_joined(d, o.stem);
+  check_something_joined(d);
   collect_values(d);
   find_orientation(d, o);
   return d;
@@ -299,9 +323,12 @@ void plot_eval(const EvalData& d, const EvaluationResult& r, const std::string& 
   write_scatter_plot(path, p);
 }
 
-int run_eval(const EvalCommandOptions& o, bool quiet) {
-  check_outputs({{"SCORES", o.scores}, {"MOS", o.mos}}, {{"-o", o.output}, {"--plot", o.plot}});
-  CsvTable scores = read_csv_table(o.scores);
+int run_eval(const EvalCommandOptions& given, bool quiet) {
+  check_outputs({{"SCORES", given.scores}, {"MOS", given.mos}},
+                {{"-o", given.output}, {"--plot", given.plot}});
+  CsvTable scores = read_csv_table(given.scores);
+  EvalCommandOptions o = given;
+  o.stem = match_by_stem(scores, given, quiet);
   if (needs_protocol(o, scores)) return run_eval_protocol(o, scores, quiet);
   const EvalData d = load_eval_data(o, std::move(scores));
   warn_partial_join(d, quiet);
@@ -313,7 +340,8 @@ int run_eval(const EvalCommandOptions& o, bool quiet) {
   if (!quiet && !r.fit.converged && !r.fit.bounded) {
     std::cerr << "qm3d: warning: the logistic fit did not converge in its evaluation budget\n";
   }
-  if (!quiet && agrees(d, r) == false) {
+  // One column: it is every metric of known orientation, so a clear disagreement is evidence.
+  if (!quiet && agrees(d, r) == false && clearly_nonzero(r.srocc.value, r.count)) {
     std::cerr << "qm3d: warning: " << d.scores_table.path << ": column \""
               << d.scores_table.header[d.scores_value] << "\" is a "
               << (*d.higher_is_better ? "quality (higher is better)" : "distortion (lower is better)")
@@ -398,7 +426,8 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_flag("--csv", o.csv, "Write CSV: statistic,value,ci95_low,ci95_high")->excludes(json);
   cmd->add_option("-o,--output", o.output, "Write to FILE instead of stdout")->type_name("FILE");
   cmd->add_option("--plot", o.plot,
-                  "Also draw score vs MOS with the fitted logistic (.svg; .png needs gnuplot)")
+                  "Also draw score vs MOS with the fitted mapping (and with Krasula's analysis "
+                  "FILE-auc: the AUCs); .svg or .png")
       ->type_name("FILE.svg|png");
 }
 

@@ -1,6 +1,5 @@
-// The scatter plot of `qm3d eval --plot`: objective score against MOS with the fitted logistic.
-// SVG is written directly; PNG is drawn by gnuplot (Debian package gnuplot-nox), run as a child
-// process, and is an error naming the missing program when gnuplot is not installed.
+// The figures of `qm3d eval --plot`: objective score against MOS with the fitted mapping, and
+// Krasula's AUCs. Each is one description (plot_canvas.h) written as SVG or rasterised to PNG.
 #pragma once
 
 #include <filesystem>
@@ -28,12 +27,13 @@ struct AucPlot {
   std::string title;
 };
 
-/// Writes the AUC figure as SVG (atomically): per metric a bar for AUC_DS and one for AUC_BW,
-/// each with its 95 % DeLong interval (AUC +- 1.96 SE), on a 0.5 (chance) to 1 axis.
+/// Writes the AUC figure (atomically; .svg or .png): per metric a bar for AUC_DS and one for
+/// AUC_BW, each with its 95 % DeLong interval (AUC +- 1.96 SE), on an axis from 0.5 (chance), or
+/// lower when a bar or interval starts lower, to 1.
 void write_auc_plot(const std::filesystem::path& path, const AucPlot& plot);
 
-/// Writes `plot` to `path` (atomically): `.svg` directly, `.png` through gnuplot.
-/// @throws InputError  another extension, gnuplot missing (for PNG) or failing, write errors
+/// Writes `plot` to `path` (atomically): `.svg` or `.png`.
+/// @throws InputError  another extension, write errors
 void write_scatter_plot(const std::filesystem::path& path, const ScatterPlot& plot);
 
 }  // namespace qm3d::app

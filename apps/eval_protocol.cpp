@@ -78,7 +78,7 @@ std::vector<std::size_t> numeric_columns(const CsvTable& t, std::size_t key) {
   for (std::size_t c = 0; c < t.header.size(); ++c) {
     const std::string& h = t.header[c];
     if (c == key || h == "reference" || h == "distorted" || h == "metric" || h == "status" ||
-        h == "error" || h == "seconds" || h == "settings" ||
+        h == "error" || h == "seconds" || h == "settings" || h == "warnings" ||
         h.find("bbox_max_side") != std::string::npos) {
       continue;
     }
@@ -421,7 +421,7 @@ std::string file_part(const std::string& name) {
 }
 
 // --plot FILE.svg|png: FILE-NAME.svg|png, a scatter per metric, and with Krasula's analysis
-// FILE-auc.svg, the AUC summary (always SVG).
+// FILE-auc.svg|png, the AUC summary.
 void plot_protocol(const std::string& path, const std::vector<MetricScores>& metrics,
                    const SubjectiveData& subjective, const ProtocolResult& r,
                    const ordered_json& j, const std::string& mos_label) {
@@ -452,11 +452,65 @@ void plot_protocol(const std::string& path, const std::vector<MetricScores>& met
   if (r.krasula) {
     auc.title = "Krasula's AUCs (" + std::to_string(r.krasula->different) + " different, " +
                 std::to_string(r.krasula->similar) + " similar pairs)";
-    write_auc_plot(sibling("auc", ".svg"), auc);
+    write_auc_plot(sibling("auc", base.extension().string()), auc);
+  }
+}
+
+// Scores ranking against their orientation. Every metric of known orientation doing so clearly
+// is evidence that the MOS runs the other way (a DMOS); one metric among others that agree
+// merely correlates poorly: no warning. A column of assumed orientation (not a registered
+// metric) clearly ranking the other way is probably a distortion.
+void warn_orientation(const std::vector<MetricScores>& metrics, const ordered_json& j,
+                      std::size_t n) {
+  std::size_t known = 0, against = 0;
+  std::string examples;
+  for (const MetricScores& m : metrics) {
+    const ordered_json& rho = j["metrics"][m.name]["statistics"]["srocc"]["value"];
+    const bool opposite = rho.is_number() && clearly_nonzero(rho.get<double>(), n) &&
+                          (rho.get<double>() > 0) != m.higher_is_better;
+    if (m.orientation_source.rfind("assumed", 0) == 0) {
+      if (opposite) {
+        std::cerr << "qm3d: warning: " << m.name << " is taken as a quality ("
+                  << m.orientation_source << ") but SROCC is " << fixed(rho)
+                  << ": a distortion (--lower-is-better " << m.name
+                  << ")? Krasula's BW analysis and C0 depend on it\n";
+      }
+      continue;
+    }
+    ++known;
+    if (!opposite) continue;
+    ++against;
+    if (against <= 3) examples += (against > 1 ? ", " : "") + m.name + " " + fixed(rho);
+  }
+  if (known > 0 && against == known) {
+    std::cerr << "qm3d: warning: every metric of known orientation ranks the stimuli the other way "
+                 "(SROCC "
+              << examples << (against > 3 ? ", ..." : "")
+              << "): is the MOS column a DMOS (higher = worse)?\n";
   }
 }
 
 }  // namespace
+
+std::string no_common_key(const CsvTable& scores, std::size_t scores_key, const CsvTable& mos,
+                          std::size_t mos_key) {
+  const auto first_key = [](const CsvTable& t, std::size_t column) -> std::string {
+    for (const auto& row : t.rows) {
+      if (column < row.size() && !row[column].empty()) return "\"" + row[column] + "\"";
+    }
+    return "none";
+  };
+  return "no stimulus in common between " + scores.path + " (key \"" + scores.header[scores_key] +
+         "\", e.g. " + first_key(scores, scores_key) + ") and " + mos.path + " (key \"" +
+         mos.header[mos_key] + "\", e.g. " + first_key(mos, mos_key) +
+         "), whole or by file stem (--stem); choose the key columns with --scores-key and "
+         "--mos-key";
+}
+
+bool clearly_nonzero(double rho, std::size_t n) {
+  // 1.96: the two-sided 5% point of the standard normal distribution.
+  return n >= 3 && std::isfinite(rho) && std::fabs(rho) * std::sqrt(double(n - 1)) > 1.96;
+}
 
 bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores) {
   return o.scores_column.find(',') != std::string::npos || o.scores_column == "all" ||
@@ -493,9 +547,12 @@ int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool 
     for (auto& [metric, table] : split) parts.push_back({metric, std::move(table), k, pivot});
   }
   std::deque<JoinedRows> joins;
+  bool joined = false;
   for (const Part& part : parts) {
     joins.push_back(join_on_key(part.table, part.key, mos, mos_key, o.stem));
+    joined = joined || !joins.back().keys.empty();
   }
+  if (!joined) throw FormatError(no_common_key(scores, key, mos, mos_key));
   std::vector<Series> series;
   std::set<std::string> names_taken;
   for (std::size_t p = 0; p < parts.size(); ++p) {
@@ -634,18 +691,7 @@ int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool 
                     {"seed", o.seed},
                     {"confidence", kConfidence},
                     {"method", "percentile; stimuli resampled with replacement; mapping refitted"}};
-  for (const MetricScores& m : metrics) {
-    const ordered_json& rho = j["metrics"][m.name]["statistics"]["srocc"]["value"];
-    if (quiet || !rho.is_number() || rho.get<double>() == 0) continue;
-    if ((rho.get<double>() > 0) != m.higher_is_better) {
-      std::cerr << "qm3d: warning: " << m.name << " is taken as a "
-                << (m.higher_is_better ? "quality" : "distortion") << " (" << m.orientation_source
-                << ") but SROCC is " << fixed(rho)
-                << (m.higher_is_better ? ": a distortion (--lower-is-better " + m.name + ")?"
-                                       : std::string(": is the MOS column a DMOS?"))
-                << " Krasula's BW analysis and C0 depend on it\n";
-    }
-  }
+  if (!quiet) warn_orientation(metrics, j, st.keys.size());
   if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, result, j, o.mos_column);
   emit_text(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
        o.output);

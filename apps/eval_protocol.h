@@ -16,4 +16,15 @@ bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores);
 /// `quiet`).
 int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet);
 
+/// "no stimulus in common between SCORES (key "k", e.g. "/d/a.ply") and MOS (key ..., e.g.
+/// "a_1"), whole or by file stem (--stem); ...": one key of each side, for the error.
+std::string no_common_key(const CsvTable& scores, std::size_t scores_key, const CsvTable& mos,
+                          std::size_t mos_key);
+
+/// Whether an SROCC of `rho` on `n` stimuli is clearly non-zero: |rho| sqrt(n - 1) > 1.96, the
+/// two-sided 5% test of Spearman's rho under independence in its normal approximation (variance
+/// 1 / (n - 1); Kendall & Stuart, The Advanced Theory of Statistics, vol. 2, 31.19). A metric
+/// ranking against its orientation only this clearly is evidence, not a poor correlation.
+bool clearly_nonzero(double rho, std::size_t n);
+
 }  // namespace qm3d::app

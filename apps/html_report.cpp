@@ -195,12 +195,14 @@ double longest_side(const std::vector<Vec3>& p) {
 
 json layer_json(const ReportEntry& e, Direction dir, const DirectionResult& d, int geometry,
                 const Shape& shape, Blobs& blobs) {
-  const std::vector<double>& v = d.per_element;
-  if (v.size() != shape.positions->size()) {
-    throw std::logic_error("report: " + e.spec->name + " has " + std::to_string(v.size()) +
-                           " per-element values for " + std::to_string(shape.positions->size()) +
-                           " elements of the " + shape.object);
+  if (d.per_element.size() != shape.positions->size()) {
+    throw std::logic_error("report: " + e.spec->name + " has " +
+                           std::to_string(d.per_element.size()) + " per-element values for " +
+                           std::to_string(shape.positions->size()) + " elements of the " +
+                           shape.object);
   }
+  // Rounding noise is no distortion: an identical pair's +-1e-17 is a flat map of zeros.
+  const std::vector<double> v = without_noise(d.per_element, longest_side(*shape.positions));
   std::vector<float> shown;
   for_shown(shape, [&](std::size_t i) { shown.push_back(static_cast<float>(v[i])); });
   const Histogram h = histogram(v, kHistogramBins);
@@ -231,6 +233,9 @@ json layer_json(const ReportEntry& e, Direction dir, const DirectionResult& d, i
           {"mean", finite ? sum / static_cast<double>(finite) : 0.0},
           {"finite", finite},
           {"histogram", h.counts},
+          {"flat", finite > 0 && h.lo == 0 && h.hi == 0},
+          {"clip_percentile", kClipPercentile},
+          {"clip_value", percentile(v, kClipPercentile)},
           {"region_radius", radius},
           {"regions", regions}};
 }
@@ -590,6 +595,14 @@ std::string js_number(double v) {
   return format_double(v);
 }
 
+// A score as people read it: 6 significant digits (the full value is the cell's data-value).
+std::string score_text(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
 // The cell's tint: transparent for the least distorted pair of the column, strongest red for
 // the most distorted.
 std::string tint(const IndexColumn& c, double v) {
@@ -619,7 +632,7 @@ std::string index_rows_html(const std::vector<IndexPair>& pairs,
       const auto it = p.scores.find(c.metric);
       const bool has = it != p.scores.end() && it->second;
       o << "<td class=\"num\" data-value=\"" << (has ? js_number(*it->second) : "") << "\""
-        << (has ? tint(c, *it->second) : "") << ">" << (has ? format_double(*it->second) : "")
+        << (has ? tint(c, *it->second) : "") << ">" << (has ? score_text(*it->second) : "")
         << "</td>";
     }
     o << "<td>";
@@ -752,6 +765,27 @@ Histogram histogram(const std::vector<double>& values, std::size_t bins) {
     ++h.counts[std::min(b, h.counts.size() - 1)];
   }
   return h;
+}
+
+std::vector<double> without_noise(std::vector<double> values, double size) {
+  const double floor = kNoiseFloor * std::max(1.0, size);
+  for (double& v : values) {
+    if (std::fabs(v) < floor) v = 0;
+  }
+  return values;
+}
+
+double percentile(const std::vector<double>& values, double p) {
+  std::vector<double> finite;
+  for (double v : values) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  if (finite.empty()) return 0;
+  std::sort(finite.begin(), finite.end());
+  // Nearest rank: the smallest value with at least p % of the values at or below it.
+  const double rank = std::ceil(p / 100 * static_cast<double>(finite.size()));
+  const std::size_t k = static_cast<std::size_t>(std::max(rank, 1.0)) - 1;
+  return finite[std::min(k, finite.size() - 1)];
 }
 
 std::vector<std::uint32_t> display_subset(std::size_t n, std::size_t budget) {

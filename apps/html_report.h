@@ -131,6 +131,19 @@ struct Histogram {
 };
 Histogram histogram(const std::vector<double>& values, std::size_t bins);
 
+/// Per-element values smaller in magnitude than this fraction of the scale (the object's
+/// longest box side, at least 1: distances, and metrics in [0, 1]) are rounding noise, shown 0.
+constexpr double kNoiseFloor = 1e-12;
+/// The heat map's default colour range ends at this percentile of the values, so that a long
+/// tail of a few large values does not push every other element to the low end of the colours.
+constexpr double kClipPercentile = 99;
+
+/// `values` with every value below kNoiseFloor * max(1, size) in magnitude set to 0.
+std::vector<double> without_noise(std::vector<double> values, double size);
+
+/// The nearest-rank `p`th percentile of the finite values (0 when there are none).
+double percentile(const std::vector<double>& values, double p);
+
 /// The elements a view keeps of `n` under `budget`: all when n <= budget, else every k-th
 /// (k = ceil(n / budget)), starting at 0.
 std::vector<std::uint32_t> display_subset(std::size_t n, std::size_t budget);

@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "demo.h"
 #include "eval_commands.h"
+#include "help_format.h"
 #include "html_report.h"
 #include "image_command.h"
 #include "merge_command.h"
@@ -217,6 +218,7 @@ int run(int argc, char** argv) {
                orientation_line() +
                " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
                "mesh."};
+  app.formatter(wrapping_formatter(help_width()));  // before the commands, which inherit it
   app.set_version_flag("--version", version_text());
   app.require_subcommand(1);
   GlobalOptions global;

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "batch.h"
+#include "batch_results.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 
@@ -77,10 +78,12 @@ int run_merge(const MergeCommand& c, bool quiet) {
                      "rerun a shard with --resume); nothing written to " + c.output +
                      " (--partial writes the rows found)");
   }
-  write_file_atomically(c.output, [&](std::ostream& out) {
-    out << m.header << "\n";
-    for (const std::string& row : m.rows) out << row << "\n";
-  });
+  // As a batch's final file: the value columns of the metrics the rows name (the rows are in
+  // the list's order already).
+  std::string text = m.header + "\n";
+  for (const std::string& row : m.rows) text += row + "\n";
+  text = tidy_results(text, {});
+  write_file_atomically(c.output, [&](std::ostream& out) { out << text; });
   if (!quiet) {
     std::cerr << "merge: " << m.rows.size() << " rows from " << m.files << " files ("
               << m.rows.size() - m.failed.size() << " ok, " << m.failed.size() << " failed, "

@@ -90,12 +90,25 @@ std::vector<const MetricSpec*> compare_metrics() {
   return out;
 }
 
+namespace {
+
+// The help heading of the options a metric brings to a command of several metrics ("Options
+// of PCQM (pcqm)"; an option several metrics take is under the first); one metric's command
+// keeps CLI11's single heading.
+std::string option_group(const std::vector<const MetricSpec*>& specs, const MetricSpec& spec) {
+  if (specs.size() < 2) return "Options";
+  return "Options of " + spec.title + " (" + spec.name + ")";
+}
+
+}  // namespace
+
 void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& specs,
                         MetricOptionsCli& cli) {
   std::set<std::string> added;
   for (const MetricSpec* spec : specs) {
     for (const OptionSpec& o : spec->options) {
       if (!added.insert(o.name).second) continue;
+      cmd->option_defaults()->group(option_group(specs, *spec));
       const std::string flag = cli_flag(o.name);
       const std::string help = option_help(specs, o.name);
       const nlohmann::json& d = o.default_value;
@@ -126,6 +139,7 @@ void add_metric_options(CLI::App* cmd, const std::vector<const MetricSpec*>& spe
       cli.given[o.name] = opt;
     }
   }
+  cmd->option_defaults()->group("Options");
 }
 
 // The options given, converted to their types (checked later against each metric's spec).

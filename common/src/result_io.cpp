@@ -153,6 +153,11 @@ nlohmann::json compare_json(const std::vector<MetricResult>& results) {
   return j;
 }
 
+std::string warnings_field(const std::vector<std::string>& warnings) {
+  if (warnings.empty()) return {};
+  return std::to_string(warnings.size()) + ": " + warnings.front();
+}
+
 std::string csv_header(const std::vector<std::string>& value_names) {
   std::ostringstream h;
   h << "reference,distorted,metric,score,status,error,seconds";
@@ -160,6 +165,7 @@ std::string csv_header(const std::vector<std::string>& value_names) {
     h << ',' << d << "_score," << d << "_bbox_max_side";
     for (std::size_t k = 1; k <= kNumFeatures; ++k) h << ',' << d << "_f" << k;
   }
+  h << ",warnings";
   for (const std::string& name : value_names) h << ',' << name;
   for (const char* d : kDirectionColumns) {
     for (const std::string& name : value_names) h << ',' << d << '_' << name;
@@ -177,6 +183,7 @@ std::string csv_row(const MetricResult& r, const std::string& error,
   const bool has_features = !r.feature_names.empty() || r.values.empty();
   append_direction(row, r.dist_to_ref, has_features);
   append_direction(row, r.ref_to_dist, has_features);
+  row << ',' << csv_field(warnings_field(r.warnings));
   append_all_values(row, &r, value_names);
   return row.str();
 }
@@ -189,6 +196,7 @@ std::string csv_error_row(const std::string& reference, const std::string& disto
       << ",,error," << csv_field(error) << ',';
   append_direction(row, std::nullopt, true);
   append_direction(row, std::nullopt, true);
+  row << ',';  // no warnings
   append_all_values(row, nullptr, value_names);
   return row.str();
 }

@@ -28,7 +28,7 @@ _VALUE_NAMES = qm3d._qm3d.csv_value_names()
 COLUMNS = qm3d._qm3d.csv_header(_VALUE_NAMES).split(",")
 """The columns, as in ``qm3d batch``'s CSV (with the named-value columns of every metric)."""
 
-_TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error"}
+_TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error", "warnings"}
 
 
 def _error_row(reference, distorted, metric, message):
@@ -130,7 +130,8 @@ def score_pairs(pairs, client=None, metric="auto", **options):
             workers as cores).
 
     Returns:
-        pandas.DataFrame with the columns of ``qm3d batch`` (COLUMNS), one row per (reference,
+        pandas.DataFrame with the columns of ``qm3d batch``'s final file (COLUMNS without the
+        named-value columns of metrics that did not run), one row per (reference,
         distorted, metric) as batch writes them (a key asked for twice is scored once); failed
         pairs have status "error", their message in "error" and NaN scores.
     """
@@ -159,5 +160,15 @@ def score_pairs(pairs, client=None, metric="auto", **options):
             cluster.close()
     # As batch: one row per (reference, distorted, metric), the first asked for.
     table = _pd.DataFrame(rows, columns=COLUMNS)
-    return table.drop_duplicates(subset=["reference", "distorted", "metric"],
-                                 keep="first").reset_index(drop=True)
+    table = table.drop_duplicates(subset=["reference", "distorted", "metric"],
+                                  keep="first").reset_index(drop=True)
+    return table[_columns_of(set(table["metric"]))]
+
+
+def _columns_of(metrics):
+    """As batch's final file: of the named-value columns, those of the metrics in `metrics`."""
+    used = set()
+    for spec in qm3d._qm3d.metrics():
+        if spec["name"] in metrics:
+            used.update(spec["value_names"])
+    return qm3d._qm3d.csv_header([n for n in _VALUE_NAMES if n in used]).split(",")

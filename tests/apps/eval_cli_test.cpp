@@ -1,5 +1,6 @@
 // End-to-end tests of `qm3d eval`, `qm3d train` and `--model`, running the built binary.
 #include <gtest/gtest.h>
+#include <stb/stb_image.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -164,10 +165,21 @@ TEST_F(EvalCli, StemMatchesBatchPathsToStimulusNames) {
                                "/r/a.ply,/d/s5.ply,pcqm,0.5,ok\n/r/a.ply,/d/s6.ply,pcqm,0.6,ok\n");
   const fs::path mos =
       file("mos.csv", "name,MOS\ns1,4.9\ns2,4.1\ns3,3.2\ns4,3\ns5,1.5\ns6,1.1\ns7,2\n");
-  const CliRun plain = qm3d("eval " + scores.string() + " " + mos.string());
-  EXPECT_EQ(plain.code, 2);
-  EXPECT_NE(plain.err.find("no stimulus in common"), std::string::npos) << plain.err;
-  EXPECT_NE(plain.err.find("try --stem"), std::string::npos) << plain.err;
+  // No key matches whole: matched by file stem, with a note saying so.
+  const CliRun plain = qm3d("eval " + scores.string() + " " + mos.string() + " --json");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  EXPECT_NE(plain.err.find("matching them by file stem (as --stem)"), std::string::npos)
+      << plain.err;
+  EXPECT_EQ(json::parse(plain.out)["stimuli"], 5);
+  EXPECT_EQ(json::parse(plain.out)["key_match"], "file stem");
+  // Nothing matches either way: the error shows one key of each side and names --stem.
+  const fs::path other = file("other.csv", "name,MOS\nx1,4.9\nx2,4.1\n");
+  const CliRun none = qm3d("eval " + scores.string() + " " + other.string());
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("(key \"distorted\", e.g. \"/d/s1.ply\")"), std::string::npos)
+      << none.err;
+  EXPECT_NE(none.err.find("(key \"name\", e.g. \"x1\")"), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("--stem"), std::string::npos) << none.err;
   const CliRun r =
       qm3d("eval " + scores.string() + " " + mos.string() + " --stem --json --bootstrap 20");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -307,6 +319,40 @@ void expect_toyama_vmaf_values(const json& j) {
     EXPECT_NEAR(p.at(ab + "delong_auc_bw"), std::stod(e.at("pBW_DL")), 1e-9) << ab;
     EXPECT_NEAR(p.at(ab + "c0"), std::stod(e.at("pCC0_b")), 1e-9) << ab;
   }
+}
+
+// "Is the MOS column a DMOS?" only on evidence: every metric of known orientation clearly ranks
+// the stimuli the other way. One metric correlating poorly, or one among others that agree, is
+// no reason.
+TEST_F(EvalCli, DmosWarningOnlyWhenEveryOrientedMetricDisagrees) {
+  const double mos_values[] = {1.1, 1.9, 2.6, 3.2, 3.8, 4.4, 4.9, 2.2};
+  const double weak_psnr[] = {30, 29, 33, 24, 31, 26, 24.5, 28};  // SROCC -0.43: poor
+  std::string weak = "reference,distorted,metric,score,status\n";
+  std::string both = weak, one = weak, mos = "distorted,mos\n";
+  for (int k = 0; k < 8; ++k) {
+    const std::string d = "r.ply,s" + std::to_string(k) + ".ply,";
+    weak += d + "psnr," + exact(weak_psnr[k]) + ",ok\n";
+    // A DMOS-like MOS: the PSNR falls and the CMDM rises as the MOS rises.
+    both += d + "psnr," + exact(40 - 2 * mos_values[k]) + ",ok\n";
+    both += d + "cmdm," + exact(0.1 * mos_values[k]) + ",ok\n";
+    one += d + "psnr," + exact(20 + 2 * mos_values[k]) + ",ok\n";
+    one += d + "cmdm," + exact(0.1 * mos_values[k]) + ",ok\n";
+    mos += "s" + std::to_string(k) + ".ply," + exact(mos_values[k]) + "\n";
+  }
+  const fs::path m = file("mos.csv", mos);
+  const std::string opts = " --bootstrap 0 --json";
+  const CliRun poor = qm3d("eval " + file("weak.csv", weak).string() + " " + m.string() + opts);
+  ASSERT_EQ(poor.code, 0) << poor.err;
+  EXPECT_EQ(poor.err.find("DMOS"), std::string::npos) << poor.err;
+  const CliRun mixed = qm3d("eval " + file("one.csv", one).string() + " " + m.string() + opts);
+  ASSERT_EQ(mixed.code, 0) << mixed.err;
+  EXPECT_EQ(mixed.err.find("DMOS"), std::string::npos) << mixed.err;
+  const CliRun dmos = qm3d("eval " + file("both.csv", both).string() + " " + m.string() + opts);
+  ASSERT_EQ(dmos.code, 0) << dmos.err;
+  EXPECT_NE(dmos.err.find("every metric of known orientation ranks the stimuli the other way"),
+            std::string::npos)
+      << dmos.err;
+  EXPECT_NE(dmos.err.find("is the MOS column a DMOS"), std::string::npos) << dmos.err;
 }
 
 TEST_F(EvalCli, KrasulaOnTheToyamaVectorsFromMosSdAndN) {
@@ -544,7 +590,7 @@ TEST_F(EvalCli, BadInputIsOneLineNamingTheFileAndColumn) {
   EXPECT_NE(r.err.find("/nonexistent/scores.csv: no such file"), std::string::npos) << r.err;
 }
 
-TEST_F(EvalCli, SvgPlotAndPngThroughGnuplot) {
+TEST_F(EvalCli, SvgAndPngPlotsFromOneDescription) {
   const fs::path svg = dir_ / "io" / "plot.svg";
   const std::string args = "eval " + basics_scores() + " " + basics_mos() + " --bootstrap 0 -q";
   ASSERT_EQ(qm3d(args + " --plot " + svg.string()).code, 0);
@@ -555,18 +601,75 @@ TEST_F(EvalCli, SvgPlotAndPngThroughGnuplot) {
   for (auto p = text.find("<circle"); p != std::string::npos; p = text.find("<circle", p + 1))
     ++circles;
   EXPECT_EQ(circles, 1140u);
-  // PNG: drawn by gnuplot when it is installed; a clear error when it is not.
+  // PNG: drawn by qm3d itself (no gnuplot on the PATH needed), the same size as the SVG.
   const fs::path png = dir_ / "io" / "plot.png";
-  const CliRun none = qm3d(args + " --plot " + png.string(), "PATH=/nonexistent");
-  EXPECT_EQ(none.code, 2);
-  EXPECT_NE(none.err.find("PNG plots are drawn by gnuplot, which is not installed"),
-            std::string::npos)
-      << none.err;
-  EXPECT_FALSE(fs::exists(png));
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot";
-  ASSERT_EQ(qm3d(args + " --plot " + png.string()).code, 0);
-  EXPECT_EQ(slurp(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  const CliRun drawn = qm3d(args + " --plot " + png.string(), "PATH=/nonexistent");
+  ASSERT_EQ(drawn.code, 0) << drawn.err;
+  int w = 0, h = 0, channels = 0;
+  ASSERT_TRUE(stbi_info(png.c_str(), &w, &h, &channels));
+  EXPECT_EQ(w, 720);
+  EXPECT_EQ(h, 540);
   EXPECT_EQ(qm3d(args + " --plot " + (dir_ / "io" / "plot.gif").string()).code, 2);
+}
+
+// The numbers of attribute `name` in an SVG element.
+double svg_attribute(const std::string& element, const std::string& name) {
+  const std::string key = " " + name + "=\"";
+  const std::size_t at = element.find(key);
+  return at == std::string::npos ? NAN : std::stod(element.substr(at + key.size()));
+}
+
+// Krasula's AUC figure as SVG and PNG: with AUCs far below chance (a column ranking the stimuli
+// the wrong way round), every bar stands inside the axes, and the PNG shows each one.
+TEST_F(EvalCli, AucFigureShowsEveryBarInSvgAndPng) {
+  std::string scores = "stimulus,right,wrong\n", mos = "stimulus,mos,sd,n\n";
+  for (int k = 0; k < 24; ++k) {
+    const double q = 1 + 4.0 * k / 23 + 0.3 * std::sin(k);
+    scores += "s" + std::to_string(k) + "," + exact(q + 0.2 * std::cos(3 * k)) + "," +
+              exact(-q + 1.6 * std::cos(5 * k)) + "\n";
+    mos += "s" + std::to_string(k) + "," + exact(q) + ",0.8,20\n";
+  }
+  const fs::path s = file("scores.csv", scores), m = file("mos.csv", mos);
+  const std::string args = "eval " + s.string() + " " + m.string() +
+                           " --scores-column right,wrong --sd-column sd --n-column n "
+                           "--bootstrap 0 -q --json --plot ";
+  const CliRun run = qm3d(args + (dir_ / "io" / "fig.svg").string());
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json j = json::parse(run.out);
+  EXPECT_LT(j["metrics"]["wrong"]["krasula"]["auc_bw"].get<double>(), 0.1);  // 0.078
+  ASSERT_EQ(qm3d(args + (dir_ / "io" / "fig.png").string()).code, 0);
+  const std::string svg = slurp(dir_ / "io" / "fig-auc.svg");
+  ASSERT_FALSE(svg.empty());
+  // The frame: the first outlined rectangle; the bars: the translucent ones.
+  const std::size_t frame_at = svg.find("stroke=\"black\"/>");
+  const std::size_t frame_start = svg.rfind("<rect", frame_at);
+  const std::string frame = svg.substr(frame_start, frame_at - frame_start);
+  const double top = svg_attribute(frame, "y"), bottom = top + svg_attribute(frame, "height");
+  int w = 0, h = 0, channels = 0;
+  unsigned char* png = stbi_load((dir_ / "io" / "fig-auc.png").c_str(), &w, &h, &channels, 3);
+  ASSERT_NE(png, nullptr);
+  std::size_t bars = 0;
+  for (auto p = svg.find("<rect"); p != std::string::npos; p = svg.find("<rect", p + 1)) {
+    const std::string bar = svg.substr(p, svg.find('>', p) - p);
+    if (bar.find("fill-opacity=\"0.70\"") == std::string::npos) continue;
+    ++bars;
+    const double x = svg_attribute(bar, "x"), y = svg_attribute(bar, "y");
+    const double bw = svg_attribute(bar, "width"), bh = svg_attribute(bar, "height");
+    EXPECT_GE(y, top) << bar;
+    EXPECT_LE(y + bh, bottom + 0.01) << bar;
+    EXPECT_GE(bh, 4.0) << bar;  // visible
+    // The PNG pixel a quarter into the bar (off its whisker) has the bar's colour over white.
+    const std::size_t px = static_cast<std::size_t>(x + bw / 4),
+                      py = static_cast<std::size_t>(y + bh / 2);
+    const unsigned char* rgb = png + (py * static_cast<std::size_t>(w) + px) * 3;
+    const std::string hex = bar.substr(bar.find("fill=\"#") + 7, 6);
+    for (int c = 0; c < 3; ++c) {
+      const double colour = std::stoi(hex.substr(2 * c, 2), nullptr, 16);
+      EXPECT_NEAR(rgb[c], 0.7 * colour + 0.3 * 255, 2) << bar << " channel " << c;
+    }
+  }
+  stbi_image_free(png);
+  EXPECT_EQ(bars, 4u);  // AUC_DS and AUC_BW of two metrics
 }
 
 // ---- train ---------------------------------------------------------------------------------

@@ -192,6 +192,67 @@ TEST_F(WrittenReport, DecimatesAboveTheBudgetAndSaysSo) {
   EXPECT_EQ(d["layers"][0]["max"], 0.5);  // statistics on every element
 }
 
+// An identical pair's per-element values are rounding noise (+-1e-17): a flat map of zeros, said
+// so, not a blue-to-red map of noise.
+TEST_F(WrittenReport, IdenticalPairIsAFlatMapOfZeros) {
+  result_.ref_to_dist->per_element = {1e-17, -2e-17, 0, 3e-18, -1e-17};
+  std::string text;
+  const nlohmann::json d = write(kDisplayBudget, text);
+  const auto& layer = d["layers"][0];
+  EXPECT_EQ(layer["min"], 0.0);
+  EXPECT_EQ(layer["max"], 0.0);
+  EXPECT_EQ(layer["flat"], true);
+  EXPECT_NE(text.find("no distortion"), std::string::npos);
+  // Real values far below 1 stay: a 1e-9 distortion is not noise.
+  result_.ref_to_dist->per_element = {0, 1e-9, 2e-9, 0, 0};
+  const nlohmann::json small = write(kDisplayBudget, text);
+  EXPECT_EQ(small["layers"][0]["flat"], false);
+  EXPECT_EQ(small["layers"][0]["max"], 2e-9);
+}
+
+// A long tail: the default colour range ends at the 99th percentile (shown and switchable in
+// the page), not at the one huge value.
+TEST_F(WrittenReport, ColourScaleClippedAtThe99thPercentileByDefault) {
+  std::vector<double> v(200);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = 0.001 * static_cast<double>(i % 10);
+  v[7] = 1000;
+  v[8] = 900;
+  result_.ref_to_dist->per_element = v;
+  cloud_.positions.assign(200, {0, 0, 0});
+  for (std::size_t i = 0; i < 200; ++i) cloud_.positions[i] = {double(i), 0, 0};
+  cloud_.colors.assign(200, {0.5, 0.5, 0.5});
+  std::string text;
+  const nlohmann::json d = write(kDisplayBudget, text);
+  const auto& layer = d["layers"][0];
+  EXPECT_EQ(layer["max"], 1000.0);
+  EXPECT_EQ(layer["clip_percentile"], 99.0);
+  EXPECT_DOUBLE_EQ(layer["clip_value"].get<double>(), 0.009);  // rank 198 of 200
+  EXPECT_NE(text.find("value=\"clip\" checked"), std::string::npos);
+  EXPECT_NE(text.find("id=\"clip-pct\""), std::string::npos);
+}
+
+TEST(HtmlReport, PercentileIsTheNearestRank) {
+  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 99), 5.0);
+  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 40), 2.0);
+  EXPECT_EQ(percentile({NAN, 7}, 50), 7.0);
+  EXPECT_EQ(percentile({}, 99), 0.0);
+  EXPECT_EQ(without_noise({1e-13, -5e-13, 2e-12, 1}, 1)[0], 0.0);
+  EXPECT_EQ(without_noise({1e-13, -5e-13, 2e-12, 1}, 1)[2], 2e-12);
+  EXPECT_EQ(without_noise({5e-10}, 1000)[0], 0.0);  // 1e-12 of a 1000-wide object
+}
+
+// Scores in the index with 6 significant digits (the cell's data-value keeps every digit).
+TEST(HtmlReport, IndexShowsSixSignificantDigits) {
+  const fs::path file = fs::temp_directory_path() /
+                        ("qm3d_html_report_digits_" + std::to_string(::getpid()) + ".html");
+  write_report_index(file, {{"r.ply", "a.ply", "cmdm", 1.0 / 3, "", ""}}, "t");
+  const std::string text = slurp(file);
+  fs::remove(file);
+  EXPECT_NE(text.find(">0.333333</td>"), std::string::npos) << text;
+  EXPECT_EQ(text.find(">0.3333333333"), std::string::npos);
+  EXPECT_NE(text.find("data-value=\"0.3333333333"), std::string::npos);  // every digit
+}
+
 TEST(HtmlReport, IndexSortsByScoreAndLinksReports) {
   const fs::path file = fs::temp_directory_path() /
                         ("qm3d_html_report_index_" + std::to_string(::getpid()) + ".html");

@@ -30,11 +30,13 @@ nlohmann::json to_json(const MetricResult& r);
 nlohmann::json compare_json(const std::vector<MetricResult>& results);
 
 /// The CSV header shared by every metric and the batch mode: fixed columns (the f1..f8 of each
-/// direction), then, for each name of `value_names` (the named values of the metrics written:
-/// MetricSpec::value_names, see metric.h csv_value_names), a column `NAME` (the result's
-/// values) and columns `dist_to_ref_NAME`, `ref_to_dist_NAME`. No value names: the fixed
-/// columns only.
+/// direction, then `warnings`: warnings_field()), then, for each name of `value_names` (the named
+/// values of the metrics written: MetricSpec::value_names, see metric.h csv_value_names), a column
+/// `NAME` (the result's values) and columns `dist_to_ref_NAME`, `ref_to_dist_NAME`. No value names:
+/// the fixed columns only.
 std::string csv_header(const std::vector<std::string>& value_names = {});
+/// The `warnings` field of a row: empty, or "N: FIRST" (their count and the first message).
+std::string warnings_field(const std::vector<std::string>& warnings);
 /// One CSV row (no newline) under csv_header(value_names). `error` non-empty marks a failed
 /// pair. A value the result lacks is an empty field; an infinite one "inf".
 std::string csv_row(const MetricResult& r, const std::string& error = {},
