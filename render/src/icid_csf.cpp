@@ -19,6 +19,8 @@
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
+#include "icid_fft.h"
+
 namespace qm3d::render::icid_detail {
 namespace {
 
@@ -232,6 +234,128 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
   }
 }
 
+/// The plan of a length, made once (plans are immutable; the views of a metric share them).
+std::shared_ptr<const BatchFft> batch_plan(int n) {
+  static std::mutex mutex;
+  static std::map<int, std::shared_ptr<const BatchFft>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[n];
+  if (!slot) slot = std::make_shared<const BatchFft>(n);
+  return slot;
+}
+
+constexpr int kLanes = BatchFft::kLanes;
+
+/// A thread's buffers for BatchFft: a block of kLanes sequences and the transform's work space.
+struct LaneBuffers {
+  std::vector<double> re, im, work_re, work_im;
+  explicit LaneBuffers(int n)
+      : re(static_cast<std::size_t>(n) * kLanes),
+        im(re.size()),
+        work_re(re.size()),
+        work_im(re.size()) {}
+};
+
+/// filter_channel_pair with BatchFft (both padded lengths supported), kLanes rows or columns at
+/// a time. The spectra are kept column by column (element l * rows + y): the row passes write
+/// and read kLanes consecutive rows of a column, the column pass reads and writes its columns'
+/// `rows` elements. Lanes past the last row or column carry zeros and are not written back.
+/// The column pass's inverse computes only the centre rows M .. 2M - 1 and the last row pass
+/// only the centre columns (BatchFft::inverse's centre third).
+void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
+                                 const CsfTables& h, int channel, int threads,
+                                 std::vector<double>& spec_re, std::vector<double>& spec_im) {
+  const int nr = kPadFactor * rows, nc = kPadFactor * cols;
+  const auto row_plan = batch_plan(nc), column_plan = batch_plan(nr);
+  spec_re.resize(static_cast<std::size_t>(rows) * nc);
+  spec_im.resize(spec_re.size());
+  const int row_blocks = (rows + kLanes - 1) / kLanes, column_blocks = (nc + kLanes - 1) / kLanes;
+#pragma omp parallel num_threads(thread_count(threads))
+  {
+    LaneBuffers row_buf(nc), column_buf(nr);
+#pragma omp for schedule(static)
+    for (int block = 0; block < row_blocks; ++block) {
+      const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
+      std::fill(row_buf.re.begin(), row_buf.re.end(), 0.0);
+      std::fill(row_buf.im.begin(), row_buf.im.end(), 0.0);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
+        for (int q = 0; q < nc; ++q) {
+          const std::size_t i = row + mirror(q - cols, cols);
+          row_buf.re[static_cast<std::size_t>(q) * kLanes + c] = a[i];
+          row_buf.im[static_cast<std::size_t>(q) * kLanes + c] = b[i];
+        }
+      }
+      row_plan->forward(row_buf.re.data(), row_buf.im.data(), row_buf.work_re.data(),
+                        row_buf.work_im.data());
+      for (int l = 0; l < nc; ++l) {
+        for (int c = 0; c < lanes; ++c) {
+          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
+          spec_re[static_cast<std::size_t>(l) * rows + y0 + c] = row_buf.re[e];
+          spec_im[static_cast<std::size_t>(l) * rows + y0 + c] = row_buf.im[e];
+        }
+      }
+    }
+#pragma omp for schedule(static)
+    for (int block = 0; block < column_blocks; ++block) {
+      const int l0 = block * kLanes, lanes = std::min(kLanes, nc - l0);
+      std::fill(column_buf.re.begin(), column_buf.re.end(), 0.0);
+      std::fill(column_buf.im.begin(), column_buf.im.end(), 0.0);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
+        for (int k = 0; k < nr; ++k) {
+          const std::size_t i = column + mirror(k - rows, rows);
+          column_buf.re[static_cast<std::size_t>(k) * kLanes + c] = spec_re[i];
+          column_buf.im[static_cast<std::size_t>(k) * kLanes + c] = spec_im[i];
+        }
+      }
+      column_plan->forward(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
+                           column_buf.work_im.data());
+      for (int c = 0; c < lanes; ++c) {
+        const double* filter = h.column(channel, std::min(l0 + c, nc - l0 - c));
+        for (int k = 0; k < nr; ++k) {
+          const std::size_t e = static_cast<std::size_t>(k) * kLanes + c;
+          column_buf.re[e] *= filter[std::min(k, nr - k)];
+          column_buf.im[e] *= filter[std::min(k, nr - k)];
+        }
+      }
+      column_plan->inverse(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
+                           column_buf.work_im.data(), true);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
+        for (int p = 0; p < rows; ++p) {
+          const std::size_t e = static_cast<std::size_t>(rows + p) * kLanes + c;
+          spec_re[column + p] = column_buf.re[e];
+          spec_im[column + p] = column_buf.im[e];
+        }
+      }
+    }
+#pragma omp for schedule(static)
+    for (int block = 0; block < row_blocks; ++block) {
+      const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
+      std::fill(row_buf.re.begin(), row_buf.re.end(), 0.0);
+      std::fill(row_buf.im.begin(), row_buf.im.end(), 0.0);
+      for (int l = 0; l < nc; ++l) {
+        for (int c = 0; c < lanes; ++c) {
+          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
+          row_buf.re[e] = spec_re[static_cast<std::size_t>(l) * rows + y0 + c];
+          row_buf.im[e] = spec_im[static_cast<std::size_t>(l) * rows + y0 + c];
+        }
+      }
+      row_plan->inverse(row_buf.re.data(), row_buf.im.data(), row_buf.work_re.data(),
+                        row_buf.work_im.data(), true);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
+        for (int x = 0; x < cols; ++x) {
+          const std::size_t e = static_cast<std::size_t>(cols + x) * kLanes + c;
+          a[row + x] = row_buf.re[e];
+          b[row + x] = row_buf.im[e];
+        }
+      }
+    }
+  }
+}
+
 using Ycc = std::array<std::vector<double>, 3>;
 
 /// XYZ -> YCC; the luminance's mean (mean2 of channel 1) subtracted and returned.
@@ -275,8 +399,17 @@ void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
   const auto tables = tables_for(kPadFactor * rows, kPadFactor * cols);
   Ycc ycc_a, ycc_b;
   const double mean_a = to_ycc(a, ycc_a), mean_b = to_ycc(b, ycc_b);
-  for (int c = 0; c < 3; ++c)
-    filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
+  const bool batched =
+      BatchFft::supported(kPadFactor * rows) && BatchFft::supported(kPadFactor * cols);
+  std::vector<double> spec_re, spec_im;  // shared by the three channels
+  for (int c = 0; c < 3; ++c) {
+    if (batched) {
+      filter_channel_pair_batched(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads, spec_re,
+                                  spec_im);
+    } else {
+      filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
+    }
+  }
   to_xyz(ycc_a, mean_a, a);
   to_xyz(ycc_b, mean_b, b);
 }
