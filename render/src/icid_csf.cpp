@@ -246,6 +246,9 @@ std::shared_ptr<const BatchFft> batch_plan(int n) {
 
 constexpr int kLanes = BatchFft::kLanes;
 
+/// A frequency index k of an axis of n samples -> the CSF tables' min(k, n - k).
+int fold(int k, int n) { return std::min(k, n - k); }
+
 /// A thread's buffers for BatchFft: a block of kLanes sequences and the transform's work space.
 struct LaneBuffers {
   std::vector<double> re, im, work_re, work_im;
@@ -254,6 +257,10 @@ struct LaneBuffers {
         im(re.size()),
         work_re(re.size()),
         work_im(re.size()) {}
+  void clear() {
+    std::fill(re.begin(), re.end(), 0.0);
+    std::fill(im.begin(), im.end(), 0.0);
+  }
 };
 
 /// filter_channel_pair with BatchFft (both padded lengths supported), kLanes rows or columns at
@@ -276,8 +283,7 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
 #pragma omp for schedule(static)
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
-      std::fill(row_buf.re.begin(), row_buf.re.end(), 0.0);
-      std::fill(row_buf.im.begin(), row_buf.im.end(), 0.0);
+      if (lanes < kLanes) row_buf.clear();
       for (int c = 0; c < lanes; ++c) {
         const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
         for (int q = 0; q < nc; ++q) {
@@ -299,8 +305,7 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
 #pragma omp for schedule(static)
     for (int block = 0; block < column_blocks; ++block) {
       const int l0 = block * kLanes, lanes = std::min(kLanes, nc - l0);
-      std::fill(column_buf.re.begin(), column_buf.re.end(), 0.0);
-      std::fill(column_buf.im.begin(), column_buf.im.end(), 0.0);
+      if (lanes < kLanes) column_buf.clear();
       for (int c = 0; c < lanes; ++c) {
         const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
         for (int k = 0; k < nr; ++k) {
@@ -311,12 +316,16 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
       }
       column_plan->forward(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
                            column_buf.work_im.data());
-      for (int c = 0; c < lanes; ++c) {
-        const double* filter = h.column(channel, std::min(l0 + c, nc - l0 - c));
-        for (int k = 0; k < nr; ++k) {
-          const std::size_t e = static_cast<std::size_t>(k) * kLanes + c;
-          column_buf.re[e] *= filter[std::min(k, nr - k)];
-          column_buf.im[e] *= filter[std::min(k, nr - k)];
+      const double* filter[kLanes];
+      for (int c = 0; c < kLanes; ++c)
+        filter[c] = h.column(channel, fold(l0 + std::min(c, lanes - 1), nc));
+      for (int k = 0; k < nr; ++k) {
+        const int k_folded = fold(k, nr);
+        double* re = &column_buf.re[static_cast<std::size_t>(k) * kLanes];
+        double* im = &column_buf.im[static_cast<std::size_t>(k) * kLanes];
+        for (int c = 0; c < kLanes; ++c) {
+          re[c] *= filter[c][k_folded];
+          im[c] *= filter[c][k_folded];
         }
       }
       column_plan->inverse(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
@@ -333,8 +342,7 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
 #pragma omp for schedule(static)
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
-      std::fill(row_buf.re.begin(), row_buf.re.end(), 0.0);
-      std::fill(row_buf.im.begin(), row_buf.im.end(), 0.0);
+      if (lanes < kLanes) row_buf.clear();
       for (int l = 0; l < nc; ++l) {
         for (int c = 0; c < lanes; ++c) {
           const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
