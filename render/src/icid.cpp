@@ -180,11 +180,12 @@ const Window& window_weights() {
 /// differs there.
 /// Compiled twice, for AVX2 and for the baseline, chosen at run time: the same additions and
 /// multiplications in the same order (AVX2 without FMA), so the same bits, twice as fast.
-__attribute__((target_clones("avx2", "default"))) std::vector<double> window_mean(
-    const std::vector<double>& q, int rows, int cols) {
+__attribute__((target_clones("avx2", "default"))) void window_mean(const std::vector<double>& q,
+                                                                   int rows, int cols,
+                                                                   std::vector<double>& out) {
   const Window& h = window_weights();
   const int out_rows = rows - 2 * kWindowRadius, out_cols = cols - 2 * kWindowRadius;
-  std::vector<double> out(static_cast<std::size_t>(out_rows) * out_cols, 0.0);
+  out.assign(static_cast<std::size_t>(out_rows) * out_cols, 0.0);
   for (int r = 0; r < out_rows; ++r) {
     double* o = &out[static_cast<std::size_t>(r) * out_cols];
     for (int j = 0; j < kWindowSize; ++j) {
@@ -196,16 +197,16 @@ __attribute__((target_clones("avx2", "default"))) std::vector<double> window_mea
       }
     }
   }
-  return out;
 }
 
 /// The per-pixel quantities whose window means the maps use (iCID.m's premaps).
 enum Quantity { kL1, kL2, kC1, kC2, kL1Sq, kL2Sq, kC1Sq, kC2Sq, kL12, kC12, kHue, kQuantities };
 
-std::array<std::vector<double>, kQuantities> quantities(const Lab2000hlPlanes& p1,
-                                                        const Lab2000hlPlanes& p2) {
+using Planes = std::vector<double>;
+
+void quantities(const Lab2000hlPlanes& p1, const Lab2000hlPlanes& p2,
+                std::array<Planes, kQuantities>& q) {
   const std::size_t n = p1.l.size();
-  std::array<std::vector<double>, kQuantities> q;
   for (auto& v : q) v.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double c1_sq = p1.a[i] * p1.a[i] + p1.b[i] * p1.b[i];
@@ -227,7 +228,6 @@ std::array<std::vector<double>, kQuantities> quantities(const Lab2000hlPlanes& p
     // contribution to the real result is ~1e-30: 0 here.
     q[kHue][i] = std::sqrt(std::max(0.0, da * da + db * db - dc * dc));
   }
-  return q;
 }
 
 /// The seven inv_k of one pixel from the window means m[q] (iCID.m's Maps_inv).
@@ -254,6 +254,20 @@ std::array<double, 7> inverse_maps(const std::array<double, kQuantities>& m,
           (c[6] + std::abs(sc12)) / (c[6] + sc1 * sc2)};
 }
 
+/// The maps' planes (30 of the image's size), kept by each calling thread between calls for
+/// images up to kScratchPixels: fresh pages cost ~20 % of a 256^2 pair without the appearance
+/// model (page faults, zeroing). Larger images use planes of their own, freed after the call.
+struct MapScratch {
+  std::array<Planes, kQuantities> quantities, means;
+  std::array<Planes, 8> terms;
+};
+constexpr std::size_t kScratchPixels = std::size_t{1} << 19;
+
+MapScratch& map_scratch() {
+  static thread_local MapScratch scratch;
+  return scratch;
+}
+
 std::array<double, 7> intent_constants(IcidIntent intent) {
   std::array<double, 7> c = kConstsPerceptual;
   if (intent != IcidIntent::kPerceptual) c[4] = kHueConstStronger;
@@ -270,12 +284,11 @@ std::array<double, 7> exponents(bool omit_maps67) {
 /// (rows in parallel), then summed in that order: the same bits for any thread count, and the
 /// reference's rounding of a mean whose terms are ~1 (1 - mean of products ~1 - 3e-4 loses 4
 /// digits: a row-major sum differs from it by up to ~4e-10 relative there).
-IcidResult pool_maps(const std::array<std::vector<double>, kQuantities>& means, int rows, int cols,
-                     const IcidOptions& o) {
+IcidResult pool_maps(const std::array<Planes, kQuantities>& means, int rows, int cols,
+                     const IcidOptions& o, std::array<Planes, 8>& terms) {
   const std::array<double, 7> c = intent_constants(o.intent), e = exponents(o.omit_maps67);
   const std::size_t n = static_cast<std::size_t>(rows) * cols;
-  std::array<std::vector<double>, 8> terms;  // 1 - inv_k (k < 7), the product of inv_k^e_k
-  for (auto& t : terms) t.resize(n);
+  for (auto& t : terms) t.resize(n);  // 1 - inv_k (k < 7), the product of inv_k^e_k
 #pragma omp parallel for schedule(static) num_threads(thread_count(o.threads))
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < cols; ++x) {
@@ -360,11 +373,14 @@ IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& tabl
   XyzPlanes xa = to_xyz(pa), xb = to_xyz(pb);
   if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
   const Lab2000hlPlanes la = to_lab2000hl(xa, table), lb = to_lab2000hl(xb, table);
-  const auto q = quantities(la, lb);
-  std::array<std::vector<double>, kQuantities> means;
+  MapScratch local;
+  MapScratch& m =
+      static_cast<std::size_t>(pa.rows) * pa.cols <= kScratchPixels ? map_scratch() : local;
+  quantities(la, lb, m.quantities);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(options.threads))
-  for (int k = 0; k < kQuantities; ++k) means[k] = window_mean(q[k], pa.rows, pa.cols);
-  return pool_maps(means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options);
+  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], pa.rows, pa.cols, m.means[k]);
+  return pool_maps(m.means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options,
+                   m.terms);
 }
 
 }  // namespace qm3d::render
