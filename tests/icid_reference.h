@@ -46,8 +46,10 @@ struct IcidCase {
 /// every non-double input by 255: the pixels become 0 or 1/255, near black. The one row of the
 /// table this decides is synth_colour_bars (7 saturated bars, every channel 0 or 255): with it,
 /// its m1 = 3.8150062714178243e-07 comes out to the last bit and every value of its 6 rows within
-/// 1e-10 (as MATLAB reads the files, m1 = 0.035). qm3d reads images as MATLAB does (uint8 / 255);
-/// the tests apply this rule to the table's images (it changes no other image of the table).
+/// 1e-10 relative but m6 and m7 of IAM=NONE (5e-10 and 1.7e-10 relative, 9e-15 and 2.2e-14
+/// absolute: within kIcidAbsoluteFloor; not traced). As MATLAB reads the files, m1 = 0.035. qm3d
+/// reads images as MATLAB does (uint8 / 255); the tests apply this rule to the table's images (it
+/// changes no other image of the table).
 inline bool octave_reads_as_binary(const std::vector<std::uint8_t>& rgb) {
   for (std::size_t i = 0; i < rgb.size(); i += 3) {
     if (rgb[i] != 0 && rgb[i] != 255) return false;
