@@ -261,6 +261,8 @@ struct LaneBuffers {
     std::fill(re.begin(), re.end(), 0.0);
     std::fill(im.begin(), im.end(), 0.0);
   }
+  /// The block as BatchFft's buffers: the sequences in (re, im).
+  BatchFft::Buffers io() { return {re.data(), im.data(), work_re.data(), work_im.data()}; }
 };
 
 /// filter_channel_pair with BatchFft (both padded lengths supported), kLanes rows or columns at
@@ -292,13 +294,13 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
           row_buf.im[static_cast<std::size_t>(q) * kLanes + c] = b[i];
         }
       }
-      row_plan->forward(row_buf.re.data(), row_buf.im.data(), row_buf.work_re.data(),
-                        row_buf.work_im.data());
+      BatchFft::Buffers io = row_buf.io();
+      row_plan->forward(io);
       for (int l = 0; l < nc; ++l) {
         for (int c = 0; c < lanes; ++c) {
           const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
-          spec_re[static_cast<std::size_t>(l) * rows + y0 + c] = row_buf.re[e];
-          spec_im[static_cast<std::size_t>(l) * rows + y0 + c] = row_buf.im[e];
+          spec_re[static_cast<std::size_t>(l) * rows + y0 + c] = io.re[e];
+          spec_im[static_cast<std::size_t>(l) * rows + y0 + c] = io.im[e];
         }
       }
     }
@@ -306,36 +308,39 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
     for (int block = 0; block < column_blocks; ++block) {
       const int l0 = block * kLanes, lanes = std::min(kLanes, nc - l0);
       if (lanes < kLanes) column_buf.clear();
-      for (int c = 0; c < lanes; ++c) {
+      for (int c = 0; c < lanes; ++c) {  // row y lands at padded rows M + y, M - 1 - y, 3M - 1 - y
         const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
-        for (int k = 0; k < nr; ++k) {
-          const std::size_t i = column + mirror(k - rows, rows);
-          column_buf.re[static_cast<std::size_t>(k) * kLanes + c] = spec_re[i];
-          column_buf.im[static_cast<std::size_t>(k) * kLanes + c] = spec_im[i];
+        double* re = column_buf.re.data() + c;
+        double* im = column_buf.im.data() + c;
+        for (int y = 0; y < rows; ++y) {
+          const double vr = spec_re[column + y], vi = spec_im[column + y];
+          for (const int k : {rows + y, rows - 1 - y, 3 * rows - 1 - y}) {
+            re[static_cast<std::size_t>(k) * kLanes] = vr;
+            im[static_cast<std::size_t>(k) * kLanes] = vi;
+          }
         }
       }
-      column_plan->forward(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
-                           column_buf.work_im.data());
+      BatchFft::Buffers io = column_buf.io();
+      column_plan->forward(io);
       const double* filter[kLanes];
       for (int c = 0; c < kLanes; ++c)
         filter[c] = h.column(channel, fold(l0 + std::min(c, lanes - 1), nc));
       for (int k = 0; k < nr; ++k) {
         const int k_folded = fold(k, nr);
-        double* re = &column_buf.re[static_cast<std::size_t>(k) * kLanes];
-        double* im = &column_buf.im[static_cast<std::size_t>(k) * kLanes];
+        double* re = io.re + static_cast<std::size_t>(k) * kLanes;
+        double* im = io.im + static_cast<std::size_t>(k) * kLanes;
         for (int c = 0; c < kLanes; ++c) {
           re[c] *= filter[c][k_folded];
           im[c] *= filter[c][k_folded];
         }
       }
-      column_plan->inverse(column_buf.re.data(), column_buf.im.data(), column_buf.work_re.data(),
-                           column_buf.work_im.data(), true);
+      column_plan->inverse(io, true);
       for (int c = 0; c < lanes; ++c) {
         const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
         for (int p = 0; p < rows; ++p) {
           const std::size_t e = static_cast<std::size_t>(rows + p) * kLanes + c;
-          spec_re[column + p] = column_buf.re[e];
-          spec_im[column + p] = column_buf.im[e];
+          spec_re[column + p] = io.re[e];
+          spec_im[column + p] = io.im[e];
         }
       }
     }
@@ -350,14 +355,14 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
           row_buf.im[e] = spec_im[static_cast<std::size_t>(l) * rows + y0 + c];
         }
       }
-      row_plan->inverse(row_buf.re.data(), row_buf.im.data(), row_buf.work_re.data(),
-                        row_buf.work_im.data(), true);
+      BatchFft::Buffers io = row_buf.io();
+      row_plan->inverse(io, true);
       for (int c = 0; c < lanes; ++c) {
         const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
         for (int x = 0; x < cols; ++x) {
           const std::size_t e = static_cast<std::size_t>(cols + x) * kLanes + c;
-          a[row + x] = row_buf.re[e];
-          b[row + x] = row_buf.im[e];
+          a[row + x] = io.re[e];
+          b[row + x] = io.im[e];
         }
       }
     }

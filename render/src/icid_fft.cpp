@@ -269,9 +269,7 @@ BatchFft::BatchFft(int n) : n_(n) {
   }
 }
 
-void BatchFft::run(double* re, double* im, double* work_re, double* work_im,
-                   bool centre_third) const {
-  double *xr = re, *xi = im, *yr = work_re, *yi = work_im;
+bool BatchFft::run(double* xr, double* xi, double* yr, double* yi, bool centre_third) const {
   for (std::size_t k = 0; k < stages_.size(); ++k) {
     const Stage& st = stages_[k];
     const StageIo s{
@@ -289,31 +287,30 @@ void BatchFft::run(double* re, double* im, double* work_re, double* work_im,
     std::swap(xr, yr);
     std::swap(xi, yi);
   }
-  if (xr != re) {  // an odd number of stages: the result is in the work buffers
-    const std::size_t count = static_cast<std::size_t>(n_) * kLanes;
-    for (std::size_t e = 0; e < count; ++e) {
-      re[e] = xr[e];
-      im[e] = xi[e];
-    }
+  return stages_.size() % 2 == 1;
+}
+
+void BatchFft::forward(Buffers& b) const {
+  if (run(b.re, b.im, b.work_re, b.work_im, false)) {
+    std::swap(b.re, b.work_re);
+    std::swap(b.im, b.work_im);
   }
 }
 
-void BatchFft::forward(double* re, double* im, double* work_re, double* work_im) const {
-  run(re, im, work_re, work_im, false);
-}
-
-void BatchFft::inverse(double* re, double* im, double* work_re, double* work_im,
-                       bool centre_third) const {
+void BatchFft::inverse(Buffers& b, bool centre_third) const {
   // The inverse DFT is the forward one with the real and imaginary parts exchanged, on the way
   // in and out (swap(x) = i conj(x)).
-  run(im, re, work_im, work_re, centre_third);
+  if (run(b.im, b.re, b.work_im, b.work_re, centre_third)) {
+    std::swap(b.re, b.work_re);
+    std::swap(b.im, b.work_im);
+  }
   const double scale = 1.0 / n_;
   const std::size_t begin = centre_third ? static_cast<std::size_t>(n_ / 3) * kLanes : 0;
   const std::size_t end = centre_third ? static_cast<std::size_t>(2 * (n_ / 3)) * kLanes
                                        : static_cast<std::size_t>(n_) * kLanes;
   for (std::size_t e = begin; e < end; ++e) {
-    re[e] *= scale;
-    im[e] *= scale;
+    b.re[e] *= scale;
+    b.im[e] *= scale;
   }
 }
 

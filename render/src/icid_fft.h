@@ -31,15 +31,20 @@ class BatchFft {
 
   int size() const { return n_; }
 
-  /// In place, unscaled: X_k = sum_j x_j exp(-2 pi i j k / n). `work_re`, `work_im`: n * kLanes
-  /// doubles each.
-  void forward(double* re, double* im, double* work_re, double* work_im) const;
+  /// A block of kLanes sequences (re, im: n * kLanes doubles each) and as much work space. A
+  /// transform leaves its result in (re, im): the stages go back and forth between the two
+  /// pairs, and where the result ends in the work pair the pointers are exchanged, no copy.
+  struct Buffers {
+    double *re, *im, *work_re, *work_im;
+  };
 
-  /// In place, scaled by 1 / n (x_j = sum_k X_k exp(2 pi i j k / n) / n). With `centre_third`
-  /// (n divisible by 3) only the outputs n/3 .. 2n/3 - 1 are computed (the rest is left
-  /// undefined): the last radix-3 stage computes only its middle output.
-  void inverse(double* re, double* im, double* work_re, double* work_im,
-               bool centre_third = false) const;
+  /// Unscaled: X_k = sum_j x_j exp(-2 pi i j k / n).
+  void forward(Buffers& b) const;
+
+  /// Scaled by 1 / n (x_j = sum_k X_k exp(2 pi i j k / n) / n). With `centre_third` (n divisible
+  /// by 3) only the outputs n/3 .. 2n/3 - 1 are computed (the rest is left undefined): the last
+  /// radix-3 stage computes only its middle output.
+  void inverse(Buffers& b, bool centre_third = false) const;
 
  private:
   struct Stage {
@@ -49,7 +54,8 @@ class BatchFft {
     std::vector<double> twiddle_re, twiddle_im;  ///< [j * (radix - 1) + t - 1] = w_{L radix}^{j t}
   };
 
-  void run(double* re, double* im, double* work_re, double* work_im, bool centre_third) const;
+  /// The stages from (xr, xi) on; true when the result ends in (yr, yi).
+  bool run(double* xr, double* xi, double* yr, double* yi, bool centre_third) const;
 
   int n_ = 0;
   std::vector<Stage> stages_;
