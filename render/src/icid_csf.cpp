@@ -286,12 +286,15 @@ void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b,
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
       if (lanes < kLanes) row_buf.clear();
-      for (int c = 0; c < lanes; ++c) {
+      for (int c = 0; c < lanes; ++c) {  // pixel x lands at N + x, N - 1 - x, 3N - 1 - x
         const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
-        for (int q = 0; q < nc; ++q) {
-          const std::size_t i = row + mirror(q - cols, cols);
-          row_buf.re[static_cast<std::size_t>(q) * kLanes + c] = a[i];
-          row_buf.im[static_cast<std::size_t>(q) * kLanes + c] = b[i];
+        double* re = row_buf.re.data() + c;
+        double* im = row_buf.im.data() + c;
+        for (int x = 0; x < cols; ++x) {
+          for (const int q : {cols + x, cols - 1 - x, 3 * cols - 1 - x}) {
+            re[static_cast<std::size_t>(q) * kLanes] = a[row + x];
+            im[static_cast<std::size_t>(q) * kLanes] = b[row + x];
+          }
         }
       }
       BatchFft::Buffers io = row_buf.io();
