@@ -178,34 +178,54 @@ const Window& window_weights() {
 /// to the running sum. The order decides the last bits, which flat areas (variances
 /// E[x^2] - mu^2 of ~0) turn into differences of ~1e-12 in the maps; a separable filter
 /// differs there.
+/// kWindowChunk output pixels of a row are summed together in registers (the 121 steps of each
+/// pixel's sum in the order above), then stored.
 /// Compiled twice, for AVX2 and for the baseline, chosen at run time: the same additions and
 /// multiplications in the same order (AVX2 without FMA), so the same bits, twice as fast.
-__attribute__((target_clones("avx2", "default"))) std::vector<double> window_mean(
-    const std::vector<double>& q, int rows, int cols) {
-  const Window& h = window_weights();
-  const int out_rows = rows - 2 * kWindowRadius, out_cols = cols - 2 * kWindowRadius;
-  std::vector<double> out(static_cast<std::size_t>(out_rows) * out_cols, 0.0);
-  for (int r = 0; r < out_rows; ++r) {
-    double* o = &out[static_cast<std::size_t>(r) * out_cols];
-    for (int j = 0; j < kWindowSize; ++j) {
-      for (int i = 0; i < kWindowSize; ++i) {
-        const double w = h[i][j];
-        const double* in =
-            &q[static_cast<std::size_t>(r + kWindowSize - 1 - i) * cols + (kWindowSize - 1 - j)];
-        for (int c = 0; c < out_cols; ++c) o[c] += w * in[c];
-      }
+constexpr int kWindowChunk = 16;
+
+/// The window sums of kWindowChunk consecutive output pixels, `in` at the first's window's
+/// bottom-right input (kernel element i = j = 0); `width` < kWindowChunk: the first `width`.
+template <bool kFull>
+__attribute__((always_inline)) inline void window_chunk(const Window& h, const double* in, int cols,
+                                                        int width, double* o) {
+  double acc[kWindowChunk] = {};
+  const int n = kFull ? kWindowChunk : width;  // a constant trip count: acc stays in registers
+  for (int j = 0; j < kWindowSize; ++j) {
+    for (int i = 0; i < kWindowSize; ++i) {
+      const double w = h[i][j];
+      const double* row = in - static_cast<std::ptrdiff_t>(i) * cols - j;
+      for (int c = 0; c < n; ++c) acc[c] += w * row[c];
     }
   }
-  return out;
+  for (int c = 0; c < n; ++c) o[c] = acc[c];
+}
+
+__attribute__((target_clones("avx2", "default"))) void window_mean(const std::vector<double>& q,
+                                                                   int rows, int cols,
+                                                                   std::vector<double>& out) {
+  const Window& h = window_weights();
+  const int out_rows = rows - 2 * kWindowRadius, out_cols = cols - 2 * kWindowRadius;
+  out.resize(static_cast<std::size_t>(out_rows) * out_cols);
+  for (int r = 0; r < out_rows; ++r) {
+    double* o = &out[static_cast<std::size_t>(r) * out_cols];
+    const double* in = &q[static_cast<std::size_t>(r + kWindowSize - 1) * cols + (kWindowSize - 1)];
+    int c0 = 0;
+    for (; c0 + kWindowChunk <= out_cols; c0 += kWindowChunk) {
+      window_chunk<true>(h, in + c0, cols, kWindowChunk, o + c0);
+    }
+    if (c0 < out_cols) window_chunk<false>(h, in + c0, cols, out_cols - c0, o + c0);
+  }
 }
 
 /// The per-pixel quantities whose window means the maps use (iCID.m's premaps).
 enum Quantity { kL1, kL2, kC1, kC2, kL1Sq, kL2Sq, kC1Sq, kC2Sq, kL12, kC12, kHue, kQuantities };
 
-std::array<std::vector<double>, kQuantities> quantities(const Lab2000hlPlanes& p1,
-                                                        const Lab2000hlPlanes& p2) {
+using Planes = std::vector<double>;
+
+void quantities(const Lab2000hlPlanes& p1, const Lab2000hlPlanes& p2,
+                std::array<Planes, kQuantities>& q) {
   const std::size_t n = p1.l.size();
-  std::array<std::vector<double>, kQuantities> q;
   for (auto& v : q) v.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double c1_sq = p1.a[i] * p1.a[i] + p1.b[i] * p1.b[i];
@@ -227,7 +247,6 @@ std::array<std::vector<double>, kQuantities> quantities(const Lab2000hlPlanes& p
     // contribution to the real result is ~1e-30: 0 here.
     q[kHue][i] = std::sqrt(std::max(0.0, da * da + db * db - dc * dc));
   }
-  return q;
 }
 
 /// The seven inv_k of one pixel from the window means m[q] (iCID.m's Maps_inv).
@@ -254,6 +273,20 @@ std::array<double, 7> inverse_maps(const std::array<double, kQuantities>& m,
           (c[6] + std::abs(sc12)) / (c[6] + sc1 * sc2)};
 }
 
+/// The maps' planes (30 of the image's size), kept by each calling thread between calls for
+/// images up to kScratchPixels: fresh pages cost ~20 % of a 256^2 pair without the appearance
+/// model (page faults, zeroing). Larger images use planes of their own, freed after the call.
+struct MapScratch {
+  std::array<Planes, kQuantities> quantities, means;
+  std::array<Planes, 8> terms;
+};
+constexpr std::size_t kScratchPixels = std::size_t{1} << 19;
+
+MapScratch& map_scratch() {
+  static thread_local MapScratch scratch;
+  return scratch;
+}
+
 std::array<double, 7> intent_constants(IcidIntent intent) {
   std::array<double, 7> c = kConstsPerceptual;
   if (intent != IcidIntent::kPerceptual) c[4] = kHueConstStronger;
@@ -265,19 +298,18 @@ std::array<double, 7> exponents(bool omit_maps67) {
   return {1, 1, kStructureExponent, 1, 1, omit_maps67 ? 0.0 : 1.0, omit_maps67 ? 0.0 : 1.0};
 }
 
-/// The maps' means and the prediction: per row sums (rows in parallel), then the rows' sums in
-/// order (the same bits for any thread count).
-IcidResult pool_maps(const std::array<std::vector<double>, kQuantities>& means, int rows, int cols,
-                     const IcidOptions& o) {
+/// The maps' means and the prediction: mean2 of the reference = sum(x(:)) / numel(x), x(:) in
+/// column-major order added one by one (Octave's sum). The per-pixel terms are computed first
+/// (rows in parallel), then summed in that order: the same bits for any thread count, and the
+/// reference's rounding of a mean whose terms are ~1 (1 - mean of products ~1 - 3e-4 loses 4
+/// digits: a row-major sum differs from it by up to ~4e-10 relative there).
+IcidResult pool_maps(const std::array<Planes, kQuantities>& means, int rows, int cols,
+                     const IcidOptions& o, std::array<Planes, 8>& terms) {
   const std::array<double, 7> c = intent_constants(o.intent), e = exponents(o.omit_maps67);
-  std::vector<std::array<double, 8>> row_sums(rows);
-  IcidResult r;
-  r.map_width = cols;
-  r.map_height = rows;
-  if (o.keep_map) r.map.resize(static_cast<std::size_t>(rows) * cols);
+  const std::size_t n = static_cast<std::size_t>(rows) * cols;
+  for (auto& t : terms) t.resize(n);  // 1 - inv_k (k < 7), the product of inv_k^e_k
 #pragma omp parallel for schedule(static) num_threads(thread_count(o.threads))
   for (int y = 0; y < rows; ++y) {
-    std::array<double, 8> sums{};
     for (int x = 0; x < cols; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * cols + x;
       std::array<double, kQuantities> m;
@@ -285,21 +317,29 @@ IcidResult pool_maps(const std::array<std::vector<double>, kQuantities>& means, 
       const std::array<double, 7> inv = inverse_maps(m, c);
       double product = 1;
       for (int k = 0; k < 7; ++k) {
-        sums[k] += 1.0 - inv[k];
+        terms[k][i] = 1.0 - inv[k];
         product *= e[k] == 1 ? inv[k] : std::pow(inv[k], e[k]);
       }
-      sums[7] += product;
-      if (o.keep_map) r.map[i] = 1.0 - product;
+      terms[7][i] = product;
     }
-    row_sums[y] = sums;
   }
   std::array<double, 8> total{};
-  for (const auto& s : row_sums) {
-    for (int k = 0; k < 8; ++k) total[k] += s[k];
+  for (int x = 0; x < cols; ++x) {
+    for (int y = 0; y < rows; ++y) {
+      const std::size_t i = static_cast<std::size_t>(y) * cols + x;
+      for (int k = 0; k < 8; ++k) total[k] += terms[k][i];
+    }
   }
-  const double n = static_cast<double>(rows) * cols;
-  for (int k = 0; k < 7; ++k) r.maps[k] = total[k] / n;
-  r.icid = 1.0 - total[7] / n;
+  IcidResult r;
+  r.map_width = cols;
+  r.map_height = rows;
+  if (o.keep_map) {
+    r.map.resize(n);
+    for (std::size_t i = 0; i < n; ++i) r.map[i] = 1.0 - terms[7][i];
+  }
+  const double count = static_cast<double>(n);
+  for (int k = 0; k < 7; ++k) r.maps[k] = total[k] / count;
+  r.icid = 1.0 - total[7] / count;
   return r;
 }
 
@@ -352,11 +392,14 @@ IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& tabl
   XyzPlanes xa = to_xyz(pa), xb = to_xyz(pb);
   if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
   const Lab2000hlPlanes la = to_lab2000hl(xa, table), lb = to_lab2000hl(xb, table);
-  const auto q = quantities(la, lb);
-  std::array<std::vector<double>, kQuantities> means;
+  MapScratch local;
+  MapScratch& m =
+      static_cast<std::size_t>(pa.rows) * pa.cols <= kScratchPixels ? map_scratch() : local;
+  quantities(la, lb, m.quantities);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(options.threads))
-  for (int k = 0; k < kQuantities; ++k) means[k] = window_mean(q[k], pa.rows, pa.cols);
-  return pool_maps(means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options);
+  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], pa.rows, pa.cols, m.means[k]);
+  return pool_maps(m.means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options,
+                   m.terms);
 }
 
 }  // namespace qm3d::render

@@ -19,6 +19,8 @@
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
+#include "icid_fft.h"
+
 namespace qm3d::render::icid_detail {
 namespace {
 
@@ -232,6 +234,144 @@ void filter_channel_pair(std::vector<double>& a, std::vector<double>& b, int row
   }
 }
 
+/// The plan of a length, made once (plans are immutable; the views of a metric share them).
+std::shared_ptr<const BatchFft> batch_plan(int n) {
+  static std::mutex mutex;
+  static std::map<int, std::shared_ptr<const BatchFft>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[n];
+  if (!slot) slot = std::make_shared<const BatchFft>(n);
+  return slot;
+}
+
+constexpr int kLanes = BatchFft::kLanes;
+
+/// A frequency index k of an axis of n samples -> the CSF tables' min(k, n - k).
+int fold(int k, int n) { return std::min(k, n - k); }
+
+/// A thread's buffers for BatchFft: a block of kLanes sequences and the transform's work space.
+struct LaneBuffers {
+  std::vector<double> re, im, work_re, work_im;
+  explicit LaneBuffers(int n)
+      : re(static_cast<std::size_t>(n) * kLanes),
+        im(re.size()),
+        work_re(re.size()),
+        work_im(re.size()) {}
+  void clear() {
+    std::fill(re.begin(), re.end(), 0.0);
+    std::fill(im.begin(), im.end(), 0.0);
+  }
+  /// The block as BatchFft's buffers: the sequences in (re, im).
+  BatchFft::Buffers io() { return {re.data(), im.data(), work_re.data(), work_im.data()}; }
+};
+
+/// filter_channel_pair with BatchFft (both padded lengths supported), kLanes rows or columns at
+/// a time. The spectra are kept column by column (element l * rows + y): the row passes write
+/// and read kLanes consecutive rows of a column, the column pass reads and writes its columns'
+/// `rows` elements. Lanes past the last row or column carry zeros and are not written back.
+/// The column pass's inverse computes only the centre rows M .. 2M - 1 and the last row pass
+/// only the centre columns (BatchFft::inverse's centre third).
+void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
+                                 const CsfTables& h, int channel, int threads,
+                                 std::vector<double>& spec_re, std::vector<double>& spec_im) {
+  const int nr = kPadFactor * rows, nc = kPadFactor * cols;
+  const auto row_plan = batch_plan(nc), column_plan = batch_plan(nr);
+  spec_re.resize(static_cast<std::size_t>(rows) * nc);
+  spec_im.resize(spec_re.size());
+  const int row_blocks = (rows + kLanes - 1) / kLanes, column_blocks = (nc + kLanes - 1) / kLanes;
+#pragma omp parallel num_threads(thread_count(threads))
+  {
+    LaneBuffers row_buf(nc), column_buf(nr);
+#pragma omp for schedule(static)
+    for (int block = 0; block < row_blocks; ++block) {
+      const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
+      if (lanes < kLanes) row_buf.clear();
+      for (int c = 0; c < lanes; ++c) {  // pixel x lands at N + x, N - 1 - x, 3N - 1 - x
+        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
+        double* re = row_buf.re.data() + c;
+        double* im = row_buf.im.data() + c;
+        for (int x = 0; x < cols; ++x) {
+          for (const int q : {cols + x, cols - 1 - x, 3 * cols - 1 - x}) {
+            re[static_cast<std::size_t>(q) * kLanes] = a[row + x];
+            im[static_cast<std::size_t>(q) * kLanes] = b[row + x];
+          }
+        }
+      }
+      BatchFft::Buffers io = row_buf.io();
+      row_plan->forward(io);
+      for (int l = 0; l < nc; ++l) {
+        for (int c = 0; c < lanes; ++c) {
+          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
+          spec_re[static_cast<std::size_t>(l) * rows + y0 + c] = io.re[e];
+          spec_im[static_cast<std::size_t>(l) * rows + y0 + c] = io.im[e];
+        }
+      }
+    }
+#pragma omp for schedule(static)
+    for (int block = 0; block < column_blocks; ++block) {
+      const int l0 = block * kLanes, lanes = std::min(kLanes, nc - l0);
+      if (lanes < kLanes) column_buf.clear();
+      for (int c = 0; c < lanes; ++c) {  // row y lands at padded rows M + y, M - 1 - y, 3M - 1 - y
+        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
+        double* re = column_buf.re.data() + c;
+        double* im = column_buf.im.data() + c;
+        for (int y = 0; y < rows; ++y) {
+          const double vr = spec_re[column + y], vi = spec_im[column + y];
+          for (const int k : {rows + y, rows - 1 - y, 3 * rows - 1 - y}) {
+            re[static_cast<std::size_t>(k) * kLanes] = vr;
+            im[static_cast<std::size_t>(k) * kLanes] = vi;
+          }
+        }
+      }
+      BatchFft::Buffers io = column_buf.io();
+      column_plan->forward(io);
+      const double* filter[kLanes];
+      for (int c = 0; c < kLanes; ++c)
+        filter[c] = h.column(channel, fold(l0 + std::min(c, lanes - 1), nc));
+      for (int k = 0; k < nr; ++k) {
+        const int k_folded = fold(k, nr);
+        double* re = io.re + static_cast<std::size_t>(k) * kLanes;
+        double* im = io.im + static_cast<std::size_t>(k) * kLanes;
+        for (int c = 0; c < kLanes; ++c) {
+          re[c] *= filter[c][k_folded];
+          im[c] *= filter[c][k_folded];
+        }
+      }
+      column_plan->inverse(io, true);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
+        for (int p = 0; p < rows; ++p) {
+          const std::size_t e = static_cast<std::size_t>(rows + p) * kLanes + c;
+          spec_re[column + p] = io.re[e];
+          spec_im[column + p] = io.im[e];
+        }
+      }
+    }
+#pragma omp for schedule(static)
+    for (int block = 0; block < row_blocks; ++block) {
+      const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
+      if (lanes < kLanes) row_buf.clear();
+      for (int l = 0; l < nc; ++l) {
+        for (int c = 0; c < lanes; ++c) {
+          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
+          row_buf.re[e] = spec_re[static_cast<std::size_t>(l) * rows + y0 + c];
+          row_buf.im[e] = spec_im[static_cast<std::size_t>(l) * rows + y0 + c];
+        }
+      }
+      BatchFft::Buffers io = row_buf.io();
+      row_plan->inverse(io, true);
+      for (int c = 0; c < lanes; ++c) {
+        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
+        for (int x = 0; x < cols; ++x) {
+          const std::size_t e = static_cast<std::size_t>(cols + x) * kLanes + c;
+          a[row + x] = io.re[e];
+          b[row + x] = io.im[e];
+        }
+      }
+    }
+  }
+}
+
 using Ycc = std::array<std::vector<double>, 3>;
 
 /// XYZ -> YCC; the luminance's mean (mean2 of channel 1) subtracted and returned.
@@ -268,15 +408,41 @@ void to_xyz(Ycc& in, double lum_mean, XyzPlanes& out) {
   }
 }
 
+/// The filtering's planes (the YCC planes and the spectra, 12 of the image's size), kept by each
+/// calling thread between calls for images up to kScratchPixels (fresh pages cost as much as a
+/// fifth of the work at 256^2); larger images use planes of their own.
+struct CsfScratch {
+  Ycc ycc_a, ycc_b;
+  std::vector<double> spec_re, spec_im;  // shared by the three channels
+};
+constexpr std::size_t kScratchPixels = std::size_t{1} << 19;
+
+CsfScratch& csf_scratch() {
+  static thread_local CsfScratch scratch;
+  return scratch;
+}
+
 }  // namespace
 
 void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
   const int rows = a.rows, cols = a.cols;
   const auto tables = tables_for(kPadFactor * rows, kPadFactor * cols);
-  Ycc ycc_a, ycc_b;
+  CsfScratch local;
+  CsfScratch& scratch =
+      static_cast<std::size_t>(rows) * cols <= kScratchPixels ? csf_scratch() : local;
+  Ycc &ycc_a = scratch.ycc_a, &ycc_b = scratch.ycc_b;
+  std::vector<double>&spec_re = scratch.spec_re, &spec_im = scratch.spec_im;
   const double mean_a = to_ycc(a, ycc_a), mean_b = to_ycc(b, ycc_b);
-  for (int c = 0; c < 3; ++c)
-    filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
+  const bool batched =
+      BatchFft::supported(kPadFactor * rows) && BatchFft::supported(kPadFactor * cols);
+  for (int c = 0; c < 3; ++c) {
+    if (batched) {
+      filter_channel_pair_batched(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads, spec_re,
+                                  spec_im);
+    } else {
+      filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
+    }
+  }
   to_xyz(ycc_a, mean_a, a);
   to_xyz(ycc_b, mean_b, b);
 }

@@ -51,11 +51,14 @@ std::vector<std::array<double, 8>> values_of_rows(const std::vector<test::IcidCa
   const auto work = [&] {
     for (std::size_t i = next++; i < cases.size(); i = next++) {
       const auto& c = cases[i];
-      if (c.is_mean() || test::icid_row_left_out(c.name)) continue;
+      if (c.is_mean()) continue;
       IcidOptions o = options_of(c.options);
       o.threads = 1;
-      out[i] = values_of(icid(read_rgb_image(icid_dir() / c.image_a),
-                              read_rgb_image(icid_dir() / c.image_b), icid_table(), o));
+      RgbImage a = read_rgb_image(icid_dir() / c.image_a);
+      RgbImage b = read_rgb_image(icid_dir() / c.image_b);
+      test::read_as_octave(a.rgb);  // the table's reading of the files (icid_reference.h)
+      test::read_as_octave(b.rgb);
+      out[i] = values_of(icid(a, b, icid_table(), o));
     }
   };
   std::vector<std::thread> workers(std::max(2u, std::thread::hardware_concurrency()) - 1);
@@ -74,7 +77,6 @@ TEST(Icid, EveryReferenceRowWithin1e10) {
   double worst = 0;
   for (std::size_t row = 0; row < cases.size(); ++row) {
     const auto& c = cases[row];
-    if (test::icid_row_left_out(c.name)) continue;
     std::array<double, 8> got = values[row];
     if (c.is_mean()) {
       ASSERT_GT(set_views[c.set()], 0) << c.name;
