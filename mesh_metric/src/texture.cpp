@@ -155,11 +155,13 @@ std::map<std::string, Material> read_materials(const ObjTexturing& t,
 
 TextureImage flat_texture(const Rgb& c) { return TextureImage{1, 1, {c}}; }
 
-// One texture per material the faces use; returns the material index of every polygon.
+// One texture per material the faces use, each texture file decoded once however many
+// materials name it; returns the texture index of every polygon.
 std::vector<std::uint32_t> load_textures(const ObjTexturing& t, const std::filesystem::path& obj,
                                          std::vector<TextureImage>& textures) {
   const auto materials = read_materials(t, obj);
   std::map<std::string, std::uint32_t> index;
+  std::map<std::string, std::uint32_t> decoded;  // texture file -> its texture
   std::vector<std::uint32_t> polygon_texture;
   for (std::size_t p = 0; p < t.polygon_materials.size(); ++p) {
     const std::string& name = t.polygon_materials[p];
@@ -168,8 +170,14 @@ std::vector<std::uint32_t> load_textures(const ObjTexturing& t, const std::files
     if (added) {
       const auto m = materials.find(name);
       if (m == materials.end()) fail(obj.string(), "material '" + name + "' is in no mtllib");
-      textures.push_back(m->second.map_kd.empty() ? flat_texture(m->second.kd)
-                                                  : read_texture(m->second.map_kd));
+      if (m->second.map_kd.empty()) {
+        textures.push_back(flat_texture(m->second.kd));
+      } else {
+        const std::string file = m->second.map_kd.lexically_normal().string();
+        const auto [d, first] = decoded.emplace(file, it->second);
+        if (first) textures.push_back(read_texture(m->second.map_kd));
+        it->second = d->second;
+      }
     }
     polygon_texture.push_back(it->second);
   }
