@@ -682,6 +682,16 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   ProgressSteps progress(options.progress, 4);
   MetricResult result;
   result.metric = "psnr";
+  // Before loading: the inputs may be released once loaded (options.inputs_done).
+  for (const auto& [cloud, name] : {std::pair{&reference, &reference_name},
+                                    std::pair{&distorted, &distorted_name}}) {
+    const BoundingBox box = bounding_box(cloud->positions);
+    const std::string w = float32_precision_warning(
+        box.min, box.max, typical_spacing(box, cloud->positions.size()),
+        "typical point spacing, box diagonal / sqrt(points)", "psnr: " + *name,
+        "pc_error");
+    if (!w.empty()) result.warnings.push_back(w);
+  }
 
   progress.begin("loading");
   const int dups = static_cast<int>(options.duplicates);
@@ -722,15 +732,6 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   if (options.inputs_done) options.inputs_done();
   const MpegCloud& na = file_normals ? *file_normals : a;  // pc_error's cloudNormalsA
   if (!options.estimate_normals) warn_of_normal_lengths(na.normals, normals_name, result.warnings);
-  for (const auto& [cloud, name] : {std::pair{&reference, &reference_name},
-                                    std::pair{&distorted, &distorted_name}}) {
-    const BoundingBox box = bounding_box(cloud->positions);
-    const std::string w = float32_precision_warning(
-        box.min, box.max, typical_spacing(box, cloud->positions.size()),
-        "typical point spacing, box diagonal / sqrt(points)", "psnr: " + *name,
-        "pc_error");
-    if (!w.empty()) result.warnings.push_back(w);
-  }
   if (na.normals.empty()) {
     result.warnings.push_back("psnr: " + reference_name +
                               " has no normals (nx, ny, nz): D2 is left out, as pc_error does "
