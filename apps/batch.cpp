@@ -117,6 +117,8 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     ScoredRow s{csv_row(result, {}, o.value_names), false, specs.front(), std::nullopt, r, d};
     if (!o.report_dir.empty()) s.result = std::move(result);
     return s;
+  } catch (const MemoryLimitError& e) {
+    return failed_row(pair, metric, std::string("out of memory: ") + e.what(), o);
   } catch (const std::bad_alloc&) {
     return failed_row(pair, metric, "out of memory", o);
   } catch (const std::exception& e) {

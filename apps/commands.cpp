@@ -62,6 +62,12 @@ RunOptions run_options_for(const MetricSpec& spec, const ScoreRequest& request) 
 
 MetricResult score(const MetricSpec& spec, const Input& reference, const Input& distorted,
                    const ScoreRequest& request, const std::filesystem::path& map) {
+  if (!map.empty() && spec.per_element_on_input && !spec.per_element_on_inputs(reference, distorted)) {
+    throw std::invalid_argument(
+        "map: " + spec.name + " scores two meshes on their grid samples, not on their vertices, "
+        "so there is no map on the meshes (sample them with qm3d sample --mode grid and score "
+        "the clouds for a map)");
+  }
   RunOptions run = run_options_for(spec, request);
   run.per_element = request.keep_per_element || !map.empty();
   if (request.release_inputs && map.empty()) {

@@ -273,6 +273,9 @@ class Shapes {
   const Shape& operator[](int i) const { return shapes_[static_cast<std::size_t>(i)]; }
   std::size_t size() const { return shapes_.size(); }
   Input::Kind reads(const MetricSpec& spec) const { return spec.reads_for(ref_, dist_); }
+  bool per_element_on_inputs(const MetricSpec& spec) const {
+    return spec.per_element_on_inputs(ref_, dist_);
+  }
 
  private:
   const Input& ref_;
@@ -302,7 +305,7 @@ void element_position_layers(const ReportEntry& e, Shapes& shapes, Blobs& blobs,
 json layers_json(const std::vector<ReportEntry>& entries, Shapes& shapes, Blobs& blobs) {
   json layers = json::array();
   for (const ReportEntry& e : entries) {
-    if (!e.spec->per_element_on_input) {
+    if (!shapes.per_element_on_inputs(*e.spec)) {
       if (e.spec->per_element_positions) element_position_layers(e, shapes, blobs, layers);
       continue;
     }
@@ -321,7 +324,7 @@ json layers_json(const std::vector<ReportEntry>& entries, Shapes& shapes, Blobs&
   return layers;
 }
 
-json metrics_json(const std::vector<ReportEntry>& entries) {
+json metrics_json(const std::vector<ReportEntry>& entries, const Shapes& shapes) {
   json metrics = json::array();
   for (const ReportEntry& e : entries) {
     json m = to_json(*e.result);
@@ -332,7 +335,7 @@ json metrics_json(const std::vector<ReportEntry>& entries) {
       for (const auto& [name, value] : e.result->values) names.push_back(name);
     }
     m["feature_names"] = names;
-    m["per_element_on_input"] = e.spec->per_element_on_input;
+    m["per_element_on_input"] = shapes.per_element_on_inputs(*e.spec);
     m["higher_is_better"] = e.spec->higher_is_better;
     m["symmetric_rule"] = e.spec->symmetric_rule;
     metrics.push_back(std::move(m));
@@ -384,7 +387,7 @@ json report_json(const std::vector<ReportEntry>& entries, const Input& ref, cons
   json j = {{"version", kVersion},
             {"reference", ref.name()},
             {"distorted", dist.name()},
-            {"metrics", metrics_json(entries)},
+            {"metrics", metrics_json(entries, shapes)},
             {"geometries", geometries},
             {"layers", layers},
             {"display_budget", settings.display_budget},

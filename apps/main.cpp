@@ -378,6 +378,8 @@ int main(int argc, char** argv) {
     return fail("error", e.what(), kExitBadInput);
   } catch (const std::invalid_argument& e) {
     return fail("error", e.what(), kExitUsage);
+  } catch (const qm3d::MemoryLimitError& e) {
+    return fail("error", (std::string("out of memory: ") + e.what()).c_str(), kExitInternal);
   } catch (const std::bad_alloc&) {
     return fail("error", "out of memory", kExitInternal);
   } catch (const std::exception& e) {

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <optional>
+#include <sstream>
+
+#include "qm3d/common/reading.h"
 
 namespace qm3d {
 
@@ -33,6 +37,27 @@ FloatBox union_box(const FloatBox& a, const FloatBox& b) {
     u.max[k] = std::max(a.max[k], b.max[k]);
   }
   return u;
+}
+
+std::string float32_precision_warning(const Vec3& min, const Vec3& max, double spacing,
+                                      const std::string& spacing_name, const std::string& name,
+                                      const std::string& tool) {
+  double largest = 0, extent = 0;
+  for (int k = 0; k < 3; ++k) {
+    largest = std::max({largest, std::fabs(min[k]), std::fabs(max[k])});
+    extent = std::max(extent, max[k] - min[k]);
+  }
+  const std::optional<double> step = large_float32_step(largest, spacing);
+  if (!step) return {};
+  std::ostringstream w;
+  w.precision(3);
+  w << name << ": coordinates reach " << largest << ", far from the origin for the content's size ("
+    << extent << "): " << tool << " computes in float32, whose step there (" << *step
+    << ") is more than 1/8 of the " << spacing_name << " (" << spacing
+    << "), so the values lose precision as in " << tool
+    << "; move the content near the origin (subtract its centre from both inputs) for precise "
+       "values";
+  return w.str();
 }
 
 }  // namespace qm3d

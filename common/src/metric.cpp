@@ -387,6 +387,11 @@ Input::Kind MetricSpec::reads_for(const Input& reference, const Input& distorted
   return reads;
 }
 
+bool MetricSpec::per_element_on_inputs(const Input& reference, const Input& distorted) const {
+  return per_element_on_input &&
+         !(two_meshes_scored_on_samples && reference.is_mesh() && distorted.is_mesh());
+}
+
 Input::Kind MetricSpec::reads_input(const Input& input, const Input& reference,
                                     const Input& distorted) const {
   if (reads_each_as_is) return input.kind();

@@ -93,6 +93,15 @@ ColourConversion colour_conversion(const ColourValues& values, ColourScale scale
   return out;
 }
 
+std::optional<double> large_float32_step(double largest, double spacing) {
+  if (!(spacing > 0) || !std::isfinite(largest)) return std::nullopt;
+  const float at = static_cast<float>(largest);
+  const double step = static_cast<double>(std::nextafter(at, std::numeric_limits<float>::max())) -
+                      static_cast<double>(at);
+  if (!(step > kLargeStepOfSpacing * spacing)) return std::nullopt;
+  return step;
+}
+
 std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& positions,
                                                     const std::string& file) {
   if (positions.size() < 2) return std::nullopt;
@@ -110,10 +119,9 @@ std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& pos
                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
   const double spacing = diagonal / std::sqrt(static_cast<double>(positions.size()));
   if (!(spacing > 0) || !std::isfinite(largest)) return std::nullopt;
-  const float at = static_cast<float>(largest);
-  const double step = static_cast<double>(std::nextafter(at, std::numeric_limits<float>::max())) -
-                      static_cast<double>(at);
-  if (!(step > kLargeStepOfSpacing * spacing)) return std::nullopt;
+  const std::optional<double> large = large_float32_step(largest, spacing);
+  if (!large) return std::nullopt;
+  const double step = *large;
   return file + ": coordinates stored as float32: at |coordinate| " + number_text(largest) +
          " the float32 step is " + number_text(step) + ", more than 1/8 of the typical point " +
          "spacing " + number_text(spacing) +

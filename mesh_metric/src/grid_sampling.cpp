@@ -11,10 +11,14 @@
 #include <cfloat>
 #include <cmath>
 #include <cstring>
+#include <exception>
+#include <limits>
 #include <stdexcept>
+#include <unordered_map>
 #include <unordered_set>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/result_io.h"
 
 namespace qm3d::mesh {
 namespace {
@@ -39,15 +43,20 @@ Float3 to_float(const Vec3& v) {
   return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
 }
 
+/// G: evalRayTriangle's ZERO_TOLERANCE on the determinant, which is (up to rounding) the
+/// triangle's cross product along the ray's axis, i.e. twice its projected area in the file's
+/// units: a face whose largest |cross component| is below it gets no ray hit (mmetric's
+/// absolute threshold, which makes the samples depend on the unit).
+constexpr float kRayEpsilon = 1e-06F;
+
 /// G: evalRayTriangle (Moller-Trumbore, epsilon ZERO_TOLERANCE = 1e-6f): (t, u, v) on a hit.
 bool ray_triangle(const Float3& origin, const Float3& dir, const Float3& v0, const Float3& v1,
                   const Float3& v2, Float3& res) {
-  constexpr float kEpsilon = 1e-06F;
   const Float3 edge1 = sub(v1, v0);
   const Float3 edge2 = sub(v2, v0);
   const Float3 pvec = cross(dir, edge2);
   const float det = dot(edge1, pvec);
-  if (det > -kEpsilon && det < kEpsilon) return false;
+  if (det > -kRayEpsilon && det < kRayEpsilon) return false;
   const float inv_det = 1.0f / det;
   const Float3 tvec = sub(origin, v0);
   const float u = dot(tvec, pvec) * inv_det;
@@ -92,7 +101,7 @@ std::size_t hash_of(const Sample& s) {
 
 /// How a triangle's corners are coloured: vertex colours, a texture, or none.
 struct Colouring {
-  const std::vector<Rgb>* vertex = nullptr;          // [0, 1] at float precision
+  const std::vector<Rgb>* vertex = nullptr;  // [0, 1] at float precision
   const TexturedMesh* textured = nullptr;
   bool bilinear = false;
 };
@@ -103,21 +112,141 @@ struct Grid {
   float step;
 };
 
-enum class TriangleStatus { kSampled, kDegenerate, kTooMany };
+/// One face's corners as the sampler reads them (float32), and what decides its samples.
+struct Corners {
+  Float3 p[3];
+  Float3 col[3] = {};       // vertex colours, 0..255
+  float uv[3][2] = {};      // texture coordinates
+  std::size_t texture = 0;  // the texture's index (textured meshes)
+};
 
-/// The samples of one triangle, appended to `out`; kTooMany (nothing appended) when its rays
-/// alone would take `out` past kMaxGridSamples.
-TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Colouring& colouring,
-                     const Grid& g, bool all_axes, std::vector<Sample>& out) {
+Corners corners_of(const ColoredMesh& mesh, std::size_t t, const Colouring& colouring) {
   const Triangle& tri = mesh.triangles[t];
-  const Float3 p1 = to_float(mesh.positions[tri[0]]);
-  const Float3 p2 = to_float(mesh.positions[tri[1]]);
-  const Float3 p3 = to_float(mesh.positions[tri[2]]);
-  const Float3 c = cross(sub(p2, p1), sub(p3, p1));
-  if (0.5 * static_cast<double>(std::sqrt(dot(c, c))) < DBL_EPSILON) {
-    return TriangleStatus::kDegenerate;
+  Corners c;
+  for (int k = 0; k < 3; ++k) c.p[k] = to_float(mesh.positions[tri[k]]);
+  if (colouring.textured != nullptr) {
+    const TexturedMesh& tm = *colouring.textured;
+    c.texture = tm.triangle_texture[t];
+    for (int k = 0; k < 3; ++k) {
+      const Uv& w = tm.uvs[tm.triangle_uvs[t][k]];
+      c.uv[k][0] = static_cast<float>(w[0]);
+      c.uv[k][1] = static_cast<float>(w[1]);
+    }
+  } else if (colouring.vertex != nullptr) {
+    for (int k = 0; k < 3; ++k) {
+      const Rgb& v = (*colouring.vertex)[tri[k]];
+      c.col[k] = {mm_channel_255(v.r), mm_channel_255(v.g), mm_channel_255(v.b)};
+    }
   }
-  const Float3 normal = normalize(c);
+  return c;
+}
+
+/// B: two faces with the same corners (positions, colours or UVs and texture, in the same
+/// order) give bit-identical samples, all of which mmetric's ModelBuilder drops as duplicates:
+/// the key under which a repeated face is sampled once.
+struct CornersKey {
+  std::array<std::uint32_t, 28> bits{};
+  bool operator==(const CornersKey& o) const { return bits == o.bits; }
+};
+
+CornersKey key_of(const Corners& c) {
+  CornersKey key;
+  std::size_t n = 0;
+  const auto put = [&](float f) {
+    if (f == 0.0f) f = 0.0f;  // -0 and +0 sample alike
+    std::memcpy(&key.bits[n++], &f, sizeof(float));
+  };
+  for (int k = 0; k < 3; ++k) {
+    for (float f : c.p[k]) put(f);
+    for (float f : c.col[k]) put(f);
+    put(c.uv[k][0]);
+    put(c.uv[k][1]);
+  }
+  key.bits[n] = static_cast<std::uint32_t>(c.texture);
+  return key;
+}
+
+struct CornersKeyHash {
+  std::size_t operator()(const CornersKey& k) const {
+    std::size_t h = 1469598103934665603ull;
+    for (std::uint32_t u : k.bits) h = (h ^ u) * 1099511628211ull;
+    return h;
+  }
+};
+
+/// What the sampler finds of one face before shooting rays.
+enum class FaceKind {
+  kSampled,     ///< sampled
+  kDegenerate,  ///< area below DBL_EPSILON: skipped (as mmetric)
+  kRepeat,      ///< the same corners as an earlier face: its samples are all duplicates
+};
+
+struct FacePlan {
+  std::vector<FaceKind> kind;
+  std::vector<std::size_t> first;  ///< per face: the face whose samples it repeats (or itself)
+  std::size_t degenerate = 0, repeats = 0;
+  std::size_t zero_normal = 0;    ///< |cross|^2 overflows float32: mmetric's normal is 0
+  std::size_t below_epsilon = 0;  ///< no ray can hit it (kRayEpsilon)
+  double estimated_samples = 0;   ///< sum of projected areas / step^2
+};
+
+/// The face's cross product (v2 - v1) x (v3 - v1) in float32 as mmetric computes it; throws
+/// when it overflows (coordinates too large for mmetric's float32 arithmetic).
+Float3 face_cross(const Corners& c, std::size_t t) {
+  const Float3 x = cross(sub(c.p[1], c.p[0]), sub(c.p[2], c.p[0]));
+  if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2])) {
+    throw NumericError("grid sampling: face " + std::to_string(t) +
+                       ": its cross product overflows float32 (mmetric's arithmetic; edges "
+                       "longer than about 1e19): scale the mesh down");
+  }
+  return x;
+}
+
+/// Classifies every face (degenerate, repeat of an earlier one, sampled) and estimates the
+/// sample count (sum over sampled faces of their area projected on the rays' axes / step^2).
+FacePlan plan_faces(const ColoredMesh& mesh, const Colouring& colouring, const Grid& g,
+                    bool all_axes) {
+  const std::size_t n = mesh.triangles.size();
+  FacePlan plan;
+  plan.kind.resize(n, FaceKind::kSampled);
+  plan.first.resize(n);
+  std::unordered_map<CornersKey, std::size_t, CornersKeyHash> seen;
+  const double cell = g.step > 0 ? double(g.step) * double(g.step) : 1.0;
+  for (std::size_t t = 0; t < n; ++t) {
+    const Corners c = corners_of(mesh, t, colouring);
+    const auto [it, inserted] = seen.emplace(key_of(c), t);
+    plan.first[t] = it->second;
+    if (!inserted)
+      plan.kind[t] = plan.kind[it->second] == FaceKind::kDegenerate ? FaceKind::kDegenerate
+                                                                    : FaceKind::kRepeat;
+    if (plan.kind[t] == FaceKind::kDegenerate) ++plan.degenerate;
+    if (plan.kind[t] == FaceKind::kRepeat) ++plan.repeats;
+    if (!inserted) continue;
+    const Float3 x = face_cross(c, t);
+    if (0.5 * static_cast<double>(std::sqrt(dot(x, x))) < DBL_EPSILON) {
+      plan.kind[t] = FaceKind::kDegenerate;
+      ++plan.degenerate;
+      continue;
+    }
+    if (std::isinf(dot(x, x))) ++plan.zero_normal;
+    const float largest = std::max({std::fabs(x[0]), std::fabs(x[1]), std::fabs(x[2])});
+    if (largest < kRayEpsilon) ++plan.below_epsilon;
+    const double projected =
+        all_axes ? double(std::fabs(x[0])) + std::fabs(x[1]) + std::fabs(x[2]) : double(largest);
+    plan.estimated_samples += 0.5 * projected / cell;
+  }
+  return plan;
+}
+
+/// The samples of one triangle, appended to `out`; false (nothing appended) when its rays
+/// alone would take `out` past kMaxGridSamples. Throws when a hit overflows float32.
+bool sample_triangle(const ColoredMesh& mesh, std::size_t t, const Colouring& colouring,
+                     const Grid& g, bool all_axes, std::vector<Sample>& out) {
+  const Corners corners = corners_of(mesh, t, colouring);
+  const Float3& p1 = corners.p[0];
+  const Float3& p2 = corners.p[1];
+  const Float3& p3 = corners.p[2];
+  const Float3 normal = normalize(cross(sub(p2, p1), sub(p3, p1)));
   Float3 tmin, tmax, lmin, lcnt;
   for (int k = 0; k < 3; ++k) {
     tmin[k] = std::min(std::min(std::min(FLT_MAX, p1[k]), p2[k]), p3[k]);
@@ -125,24 +254,8 @@ TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Col
     lmin[k] = std::floor((tmin[k] - g.min[k]) / g.step);
     lcnt[k] = std::ceil((tmax[k] - g.min[k]) / g.step) - lmin[k];
   }
-  // Corner colours (0..255 floats) and UVs.
-  Float3 col[3] = {};
-  float uv[3][2] = {};
-  const TextureImage* image = nullptr;
-  if (colouring.textured != nullptr) {
-    const TexturedMesh& tm = *colouring.textured;
-    image = &tm.textures[tm.triangle_texture[t]];
-    for (int k = 0; k < 3; ++k) {
-      const Uv& w = tm.uvs[tm.triangle_uvs[t][k]];
-      uv[k][0] = static_cast<float>(w[0]);
-      uv[k][1] = static_cast<float>(w[1]);
-    }
-  } else if (colouring.vertex != nullptr) {
-    for (int k = 0; k < 3; ++k) {
-      const Rgb& v = (*colouring.vertex)[tri[k]];
-      col[k] = {mm_channel_255(v.r), mm_channel_255(v.g), mm_channel_255(v.b)};
-    }
-  }
+  const TextureImage* image =
+      colouring.textured != nullptr ? &colouring.textured->textures[corners.texture] : nullptr;
   const int first_axis = all_axes ? 0 : main_axis(normal);
   const int last_axis = all_axes ? 2 : first_axis;
   double rays = 0;
@@ -150,7 +263,7 @@ TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Col
     const int second = axis == 0 ? 1 : 0, third = axis == 2 ? 1 : 2;
     rays += (double(lcnt[second]) + 1) * (double(lcnt[third]) + 1);
   }
-  if (rays + double(out.size()) > double(kMaxGridSamples)) return TriangleStatus::kTooMany;
+  if (rays + double(out.size()) > double(kMaxGridSamples)) return false;
   for (int axis = first_axis; axis <= last_axis; ++axis) {
     const int second = axis == 0 ? 1 : 0;
     const int third = axis == 2 ? 1 : 2;
@@ -166,22 +279,30 @@ TriangleStatus sample_triangle(const ColoredMesh& mesh, std::size_t t, const Col
         if (!ray_triangle(origin, dir, p1, p2, p3, res)) continue;
         Sample s;
         for (int k = 0; k < 3; ++k) s.pos[k] = origin[k] + dir[k] * res[0];
+        if (!std::isfinite(s.pos[0]) || !std::isfinite(s.pos[1]) || !std::isfinite(s.pos[2])) {
+          throw NumericError("grid sampling: face " + std::to_string(t) +
+                             ": a ray hit overflows float32 (mmetric's arithmetic; coordinates "
+                             "beyond about 1e12): scale the mesh down");
+        }
         s.nrm = normal;
         const float w0 = 1.0f - res[1] - res[2];
         if (image != nullptr) {
-          const float u = uv[0][0] * w0 + uv[1][0] * res[1] + uv[2][0] * res[2];
-          const float v = uv[0][1] * w0 + uv[1][1] * res[1] + uv[2][1] * res[2];
+          const float u =
+              corners.uv[0][0] * w0 + corners.uv[1][0] * res[1] + corners.uv[2][0] * res[2];
+          const float v =
+              corners.uv[0][1] * w0 + corners.uv[1][1] * res[1] + corners.uv[2][1] * res[2];
           s.col = mm_texture_lookup(*image, u, v, colouring.bilinear);
         } else {
           for (int k = 0; k < 3; ++k) {
-            s.col[k] = col[0][k] * w0 + col[1][k] * res[1] + col[2][k] * res[2];
+            s.col[k] =
+                corners.col[0][k] * w0 + corners.col[1][k] * res[1] + corners.col[2][k] * res[2];
           }
         }
         out.push_back(s);
       }
     }
   }
-  return TriangleStatus::kSampled;
+  return true;
 }
 
 Grid make_grid(const FloatBox& box, int grid_size) {
@@ -189,20 +310,124 @@ Grid make_grid(const FloatBox& box, int grid_size) {
   float range = 0;
   for (int k = 0; k < 3; ++k) {
     if (!std::isfinite(box.min[k]) || !std::isfinite(box.max[k]) || box.min[k] > box.max[k]) {
-      throw NumericError("grid sampling: the box is not a finite box (min above max or not "
-                         "finite)");
+      throw NumericError(
+          "grid sampling: the box is not a finite box (min above max or not "
+          "finite)");
     }
   }
   const Float3 diag = sub(box.max, box.min);
+  if (!std::isfinite(diag[0]) || !std::isfinite(diag[1]) || !std::isfinite(diag[2])) {
+    throw NumericError(
+        "grid sampling: the box's size overflows float32 (mmetric's arithmetic): "
+        "scale the mesh down");
+  }
   range = std::max(std::max(diag[0], diag[1]), diag[2]);
   g.step = range * (1.0F / static_cast<float>(grid_size - 1));
   int flat = 0;
   for (int k = 0; k < 3; ++k) flat += box.min[k] == box.max[k];
   if (flat >= 2) {
-    throw NumericError("grid sampling: the box is flat on two axes (a line or a point): no ray "
-                       "crosses it");
+    throw NumericError(
+        "grid sampling: the box is flat on two axes (a line or a point): no ray "
+        "crosses it");
   }
   return g;
+}
+
+/// Bytes one sample takes at least while it is made and scored (the sample, its copy in the
+/// output, the duplicate set's node and bucket, the scorer's double copy).
+constexpr double kBytesPerSample = 160;
+
+/// Refuses a sampling whose estimated sample count exceeds kMaxGridSamples or whose estimated
+/// memory exceeds what the process may allocate, naming the estimate and a grid size that fits.
+void check_estimate(const FacePlan& plan, int grid_size) {
+  const double samples = plan.estimated_samples;
+  const double memory = double(memory_limit_bytes());
+  const double fits = std::min(double(kMaxGridSamples),
+                               memory > 0 ? memory / kBytesPerSample : double(kMaxGridSamples));
+  if (samples <= fits) return;
+  const int suggested = std::max(2, static_cast<int>(grid_size * std::sqrt(fits / samples) * 0.9));
+  std::string why = samples > double(kMaxGridSamples)
+                        ? "more than the limit of " + std::to_string(kMaxGridSamples)
+                        : "needing about " + short_number(samples * kBytesPerSample / 1e9) +
+                              " GB, more than the " + short_number(memory / 1e9) +
+                              " GB this process may use";
+  throw MemoryLimitError("grid sampling: grid size " + std::to_string(grid_size) + " gives about " +
+                         short_number(samples) +
+                         " samples (the faces' area / "
+                         "step^2), " +
+                         why + "; a grid size of about " + std::to_string(suggested) + " fits");
+}
+
+void add_plan_warnings(const FacePlan& plan, std::size_t faces, GridSamples& out) {
+  if (out.degenerate_faces > 0) {
+    out.warnings.push_back(std::to_string(out.degenerate_faces) +
+                           " faces of zero area were not sampled (as mmetric)");
+  }
+  if (plan.zero_normal > 0) {
+    out.warnings.push_back(
+        std::to_string(plan.zero_normal) + " of " + std::to_string(faces) +
+        " faces are so large (edges above about 1e9) that their squared normal overflows "
+        "float32: as in mmetric, their normal is zero, their rays go along x only and D2 on them "
+        "is 0, so the values differ from those of a scaled-down copy; scale the meshes down "
+        "(e.g. to metres) for unit-independent values");
+  }
+  if (plan.below_epsilon > 0) {
+    out.warnings.push_back(
+        std::to_string(plan.below_epsilon) + " of " + std::to_string(faces) +
+        " faces are smaller than mmetric's absolute ray-triangle epsilon (twice their projected "
+        "area below 1e-6 in the file's units) and get no samples, as in mmetric: its grid "
+        "sampling depends on the unit; scale the meshes up (e.g. to millimetres) to sample "
+        "every face");
+  }
+}
+
+/// The triangles sampled in parallel in fixed blocks (each distinct face once), gathered in
+/// triangle order; an exception in a block (out of memory, float32 overflow) is rethrown after
+/// the loop, the first block's first.
+std::vector<std::vector<Sample>> sample_blocks(const ColoredMesh& mesh, const Colouring& colouring,
+                                               const Grid& g, const FacePlan& plan,
+                                               const GridSamplingOptions& o,
+                                               std::vector<std::uint32_t>& face_samples) {
+  const long n = static_cast<long>(mesh.triangles.size());
+  constexpr long kBlock = 2048;
+  const long blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<Sample>> parts(static_cast<std::size_t>(blocks));
+  std::vector<char> overflow(static_cast<std::size_t>(blocks), 0);
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(blocks));
+  face_samples.assign(static_cast<std::size_t>(n), 0);
+#pragma omp parallel for schedule(dynamic, 1) \
+    num_threads(o.threads > 0 ? o.threads : omp_get_max_threads())
+  for (long b = 0; b < blocks; ++b) {
+    try {
+      std::vector<Sample>& part = parts[b];
+      for (long t = b * kBlock; t < std::min(n, (b + 1) * kBlock); ++t) {
+        if (plan.kind[t] != FaceKind::kSampled) continue;
+        const std::size_t before = part.size();
+        if (!sample_triangle(mesh, static_cast<std::size_t>(t), colouring, g, o.all_axes, part)) {
+          overflow[b] = 1;
+          break;
+        }
+        face_samples[t] = static_cast<std::uint32_t>(
+            std::min<std::size_t>(part.size() - before, std::numeric_limits<std::uint32_t>::max()));
+      }
+    } catch (...) {
+      parts[b] = {};
+      errors[b] = std::current_exception();
+    }
+  }
+  for (long b = 0; b < blocks; ++b) {
+    if (errors[b]) std::rethrow_exception(errors[b]);
+  }
+  std::size_t total = 0;
+  for (long b = 0; b < blocks; ++b) {
+    total += parts[b].size();
+    if (overflow[b] || total > kMaxGridSamples) {
+      throw MemoryLimitError("grid sampling: more than " + std::to_string(kMaxGridSamples) +
+                             " samples (grid size " + std::to_string(o.grid_size) +
+                             " is too fine for this mesh and box)");
+    }
+  }
+  return parts;
 }
 
 GridSamples sample(const ColoredMesh& mesh, const Colouring& colouring,
@@ -217,8 +442,9 @@ GridSamples sample(const ColoredMesh& mesh, const Colouring& colouring,
   out.box = o.box ? *o.box : own;
   for (int k = 0; o.box && k < 3; ++k) {
     if (own.min[k] < out.box.min[k] || own.max[k] > out.box.max[k]) {
-      out.warnings.push_back("the mesh's vertices reach outside the grid's box (as mmetric, the "
-                             "grid is extended past it: its nodes keep the box's origin and step)");
+      out.warnings.push_back(
+          "the mesh's vertices reach outside the grid's box (as mmetric, the "
+          "grid is extended past it: its nodes keep the box's origin and step)");
       break;
     }
   }
@@ -226,45 +452,31 @@ GridSamples sample(const ColoredMesh& mesh, const Colouring& colouring,
   out.step = g.step;
   const bool colours = colouring.vertex != nullptr || colouring.textured != nullptr;
 
-  // Triangles sampled in parallel in fixed blocks, gathered in triangle order.
-  const long n = static_cast<long>(mesh.triangles.size());
-  constexpr long kBlock = 2048;
-  const long blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<Sample>> parts(static_cast<std::size_t>(blocks));
-  std::vector<std::size_t> degenerate(static_cast<std::size_t>(blocks), 0);
-  std::vector<char> overflow(static_cast<std::size_t>(blocks), 0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(o.threads > 0 ? o.threads : omp_get_max_threads())
-  for (long b = 0; b < blocks; ++b) {
-    std::vector<Sample>& part = parts[b];
-    for (long t = b * kBlock; t < std::min(n, (b + 1) * kBlock); ++t) {
-      const TriangleStatus status =
-          sample_triangle(mesh, static_cast<std::size_t>(t), colouring, g, o.all_axes, part);
-      if (status == TriangleStatus::kDegenerate) ++degenerate[b];
-      if (status == TriangleStatus::kTooMany) {
-        overflow[b] = 1;
-        break;
-      }
-    }
-  }
+  const FacePlan plan = plan_faces(mesh, colouring, g, o.all_axes);
+  check_estimate(plan, o.grid_size);
+  std::vector<std::uint32_t> face_samples;
+  const std::vector<std::vector<Sample>> parts =
+      sample_blocks(mesh, colouring, g, plan, o, face_samples);
   std::size_t total = 0;
-  for (long b = 0; b < blocks; ++b) {
-    total += parts[b].size();
-    out.degenerate_faces += degenerate[b];
-    if (overflow[b] || total > kMaxGridSamples) {
-      throw NumericError("grid sampling: more than " + std::to_string(kMaxGridSamples) +
-                         " samples (grid size " + std::to_string(o.grid_size) +
-                         " is too fine for this mesh and box)");
-    }
+  for (const std::vector<Sample>& part : parts) total += part.size();
+  out.degenerate_faces = plan.degenerate;
+  out.repeated_faces = plan.repeats;
+  // B: a repeated face's samples, equal to its first occurrence's, all count as dropped.
+  for (std::size_t t = 0; t < plan.kind.size(); ++t) {
+    if (plan.kind[t] == FaceKind::kRepeat) out.duplicate_samples += face_samples[plan.first[t]];
   }
 
   if (total == 0) {
     throw NumericError("grid sampling: no samples (grid size " + std::to_string(o.grid_size) +
-                       " is too coarse for its faces, or every face has zero area)");
+                       " is too coarse for its faces, or every face has zero area" +
+                       (plan.below_epsilon > 0
+                            ? ", or its faces are below mmetric's absolute ray-triangle epsilon "
+                              "(twice their projected area under 1e-6 in the file's units: scale "
+                              "the mesh up, e.g. to millimetres)"
+                            : std::string()) +
+                       ")");
   }
-  if (out.degenerate_faces > 0) {
-    out.warnings.push_back(std::to_string(out.degenerate_faces) +
-                           " faces of zero area were not sampled (as mmetric)");
-  }
+  add_plan_warnings(plan, mesh.triangles.size(), out);
 
   // B: pushVertex drops a sample equal to one already kept.
   const auto hash = [](const Sample* s) { return hash_of(*s); };

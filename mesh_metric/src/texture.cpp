@@ -177,17 +177,26 @@ std::string unusable_materials(const ObjTexturing& t, const std::filesystem::pat
   return {};
 }
 
-// One texture per material the faces use; returns the material index of every polygon.
+// One texture per material the faces use, each texture file decoded once however many
+// materials name it; returns the texture index of every polygon.
 std::vector<std::uint32_t> load_textures(const ObjTexturing& t,
                                          const std::map<std::string, Material>& materials,
                                          std::vector<TextureImage>& textures) {
   std::map<std::string, std::uint32_t> index;
+  std::map<std::string, std::uint32_t> decoded;  // texture file -> its texture
   std::vector<std::uint32_t> polygon_texture;
   for (const std::string& name : t.polygon_materials) {
     auto [it, added] = index.emplace(name, static_cast<std::uint32_t>(textures.size()));
     if (added) {
       const Material& m = materials.at(name);
-      textures.push_back(m.map_kd.empty() ? flat_texture(m.kd) : read_texture(m.map_kd));
+      if (m.map_kd.empty()) {
+        textures.push_back(flat_texture(m.kd));
+      } else {
+        const std::string file = m.map_kd.lexically_normal().string();
+        const auto [d, first] = decoded.emplace(file, it->second);
+        if (first) textures.push_back(read_texture(m.map_kd));
+        it->second = d->second;
+      }
     }
     polygon_texture.push_back(it->second);
   }

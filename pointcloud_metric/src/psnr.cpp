@@ -449,6 +449,16 @@ void check_cloud(const ColoredCloud& c, const std::string& name, bool colour) {
       }
     }
   }
+  for (int k = 0; k < 3; ++k) {
+    const auto [lo, hi] = std::minmax_element(
+        c.positions.begin(), c.positions.end(),
+        [k](const Vec3& a, const Vec3& b) { return a[k] < b[k]; });
+    if (!std::isfinite(static_cast<float>((*hi)[k]) - static_cast<float>((*lo)[k]))) {
+      throw NumericError("psnr: " + name + ": the cloud spans more than float32 can hold (" +
+                         short_number((*lo)[k]) + " to " + short_number((*hi)[k]) +
+                         "; pc_error's distances overflow): scale the cloud down");
+    }
+  }
   if (colour && c.colors.empty()) {
     throw FormatError(name + ": no vertex colours (psnr's colour values need one colour per point; "
                       "give --no-color for geometry only)");
@@ -473,6 +483,65 @@ void check_normals(const std::vector<Vec3>& normals, std::size_t points, const s
       }
     }
   }
+}
+
+/// Warns when the normals D2 projects on are not unit length: pc_error uses them as given, so
+/// D2 scales with their squared length (zero normals: D2 = 0 and an infinite PSNR; huge ones:
+/// float32 overflow, an infinite D2).
+void warn_of_normal_lengths(const std::vector<Point3f>& normals, const std::string& name,
+                            std::vector<std::string>& warnings) {
+  // Lengths within 1 % of 1 are unit normals written with few digits.
+  constexpr double kUnitTolerance = 0.01;
+  std::size_t off = 0;
+  double shortest = HUGE_VAL, longest = 0;
+  for (const Point3f& n : normals) {
+    const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+    if (std::fabs(len - 1.0) <= kUnitTolerance) continue;
+    ++off;
+    shortest = std::min(shortest, len);
+    longest = std::max(longest, len);
+  }
+  if (off == 0) return;
+  warnings.push_back("psnr: " + name + ": " + std::to_string(off) + " of " +
+                     std::to_string(normals.size()) + " normals are not unit length (" +
+                     short_number(shortest) + " to " + short_number(longest) +
+                     "): as pc_error, D2 uses them as given, so it scales with their squared "
+                     "length (zero normals give D2 = 0, huge ones overflow float32); normalise "
+                     "them (or --normals estimate)");
+}
+
+/// Warns of each error value that is not finite (float32 overflow in pc_error's arithmetic).
+void warn_of_non_finite(const NamedValues& values, std::vector<std::string>& warnings) {
+  for (const auto& [name, v] : values) {
+    const bool error_value = name.size() < 5 || name.compare(name.size() - 5, 5, "_psnr") != 0;
+    if (!error_value || std::isfinite(v)) continue;
+    warnings.push_back("psnr: " + name + " is " + short_number(v) +
+                       ": float32 overflow in pc_error's arithmetic (coordinates or normals too "
+                       "large); scale the inputs down");
+  }
+}
+
+/// pc_error's tie threshold is absolute (a squared distance): once it is not small against the
+/// squared point spacing, neighbours at different distances count as tied (their colours
+/// averaged, D2 averaged over them), so the values depend on the unit.
+constexpr double kTieWarningShare = 1e-3;
+
+void warn_of_tie_threshold(double threshold, double spacing, const std::string& name,
+                           const std::string& tool, std::vector<std::string>& warnings) {
+  if (!(threshold > kTieWarningShare * spacing * spacing)) return;
+  warnings.push_back("psnr: " + name + ": its point spacing (" + short_number(spacing) +
+                     ") is so small that " + tool + "'s absolute tie threshold (" +
+                     short_number(threshold) +
+                     " on squared distances) treats neighbours at different distances as "
+                     "tied, as " + tool + " does: colour and D2 values depend on the unit; "
+                     "scale the inputs up (e.g. to millimetres) for unit-independent values");
+}
+
+/// The readers' typical point spacing: bounding-box diagonal / sqrt(points).
+double typical_spacing(const BoundingBox& box, std::size_t points) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) d2 += (box.max[k] - box.min[k]) * (box.max[k] - box.min[k]);
+  return std::sqrt(d2) / std::sqrt(static_cast<double>(points));
 }
 
 /// --normals estimate: ../shared/tools/add_pca_normals.py's normals (float32, as it writes them).
@@ -508,6 +577,7 @@ constexpr const char* kMmetricTool = "MPEG mmetric 1.1.7 (MPEGGroup/mpeg-pcc-mme
 
 /// How the loaded clouds are compared: pc_error's rules, or mmetric's compare --mode pcc.
 struct Conventions {
+  const char* tool = "pc_error";
   double tie_threshold = kPcErrorTieThreshold;
   D2Normals d2_normals = D2Normals::kTransferred;
 };
@@ -540,10 +610,15 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
     const NnDistances nn = nn_distances(a, a_tree, options.threads);
     if (nn.max <= DBL_MIN) {
       throw NumericError("psnr: " + reference_name +
-                         ": no two distinct points, so no nearest-neighbour distance gives a "
-                         "peak; give --peak");
+                         ": no point has a nearest neighbour farther than pc_error's absolute "
+                         "1e-5 (no two distinct points, or a spacing below 1e-5 in the file's "
+                         "units), so no peak; give --peak or scale the clouds up");
     }
     peak = nn.max;
+    if (options.colour || d2) {
+      warn_of_tie_threshold(conventions.tie_threshold, nn.max, reference_name,
+                            conventions.tool, result.warnings);
+    }
     details["nn_min"] = nn.min;
     details["nn_max"] = nn.max;
   }
@@ -582,6 +657,7 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
     result.dist_to_ref = direction_result(*ba, o, b, options.per_element, d2, options.colour);
   }
   result.values = ab && ba ? symmetric_values(*ab, *ba) : ab ? *ab : *ba;
+  warn_of_non_finite(result.values, result.warnings);
   result.score = *find_value(result.values, "d1_psnr");
   // The source the caller recorded: a mesh's peak is computed (the box diagonal), not given.
   result.text_note =
@@ -608,6 +684,16 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   ProgressSteps progress(options.progress, 4);
   MetricResult result;
   result.metric = "psnr";
+  // Before loading: the inputs may be released once loaded (options.inputs_done).
+  for (const auto& [cloud, name] : {std::pair{&reference, &reference_name},
+                                    std::pair{&distorted, &distorted_name}}) {
+    const BoundingBox box = bounding_box(cloud->positions);
+    const std::string w = float32_precision_warning(
+        box.min, box.max, typical_spacing(box, cloud->positions.size()),
+        "typical point spacing, box diagonal / sqrt(points)", "psnr: " + *name,
+        "pc_error");
+    if (!w.empty()) result.warnings.push_back(w);
+  }
 
   progress.begin("loading");
   const int dups = static_cast<int>(options.duplicates);
@@ -647,6 +733,7 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   }
   if (options.inputs_done) options.inputs_done();
   const MpegCloud& na = file_normals ? *file_normals : a;  // pc_error's cloudNormalsA
+  if (!options.estimate_normals) warn_of_normal_lengths(na.normals, normals_name, result.warnings);
   if (na.normals.empty()) {
     result.warnings.push_back("psnr: " + reference_name +
                               " has no normals (nx, ny, nz): D2 is left out, as pc_error does "
@@ -743,6 +830,15 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
                                   vertex_box(distorted.mesh().mesh.positions));
   g.bilinear = options.bilinear;
   g.threads = options.threads;
+  const FloatBox& fb = *g.box;
+  const float grid_step = std::max({fb.max[0] - fb.min[0], fb.max[1] - fb.min[1],
+                                    fb.max[2] - fb.min[2]}) /
+                          static_cast<float>(options.grid_size - 1);
+  const std::string far = float32_precision_warning(
+      Vec3{fb.min[0], fb.min[1], fb.min[2]}, Vec3{fb.max[0], fb.max[1], fb.max[2]}, grid_step,
+      "grid step",
+      "psnr: " + reference.name() + ", " + distorted.name(), "mmetric");
+  if (!far.empty()) result.warnings.push_back(far);
   GridSamples sa = sampler(reference, g);
   GridSamples sb = sampler(distorted, g);
   for (const auto& [s, in] : {std::pair{&sa, &reference}, std::pair{&sb, &distorted}}) {
@@ -788,6 +884,7 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   const MpegCloud b = load(sb);
   if (options.inputs_done) options.inputs_done();
   Conventions c;
+  c.tool = "mmetric";
   c.tie_threshold = kMmetricTieThreshold;
   c.d2_normals = options.d2_normals;
   compare_loaded(a, b, a, peak, o, c, reference.name(), progress, details, result);
@@ -904,6 +1001,7 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
   s.applies_to = AppliesTo::kClouds;
   s.reads = Input::Kind::kCloud;
   s.reads_two_meshes_as_meshes = true;
+  s.two_meshes_scored_on_samples = true;
   s.default_direction = Direction::kSymmetric;
   s.direction_help =
       "symmetric: both passes, each value the worse of the two (pc_error's \"Final\"); "

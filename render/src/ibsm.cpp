@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/large_arrays.h"
 #include "qm3d/common/version.h"
@@ -261,6 +262,16 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
                          (reference_name + " or " + distorted_name) +
                          " draws nothing; view left out");
   }
+  // The renderer works in float32 like mmetric's OpenGL: content far from the origin loses
+  // precision against a pixel's footprint (the frame's diameter / resolution).
+  const Float3& c = frame.center;
+  const float half = frame.radius;
+  const std::string far = float32_precision_warning(
+      Vec3{c[0] - half, c[1] - half, c[2] - half}, Vec3{c[0] + half, c[1] + half, c[2] + half},
+      2.0 * half / options.resolution, "pixel size",
+      "ibsm: " + reference_name + ", " + distorted_name,
+      "mmetric's renderer");
+  if (!far.empty()) r.warnings.push_back(far);
   std::size_t matched = 0;
   NamedValues values = pooled_values(views, matched);
   if (matched == 0) {

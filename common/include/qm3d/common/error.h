@@ -5,8 +5,11 @@
 // NumericError are "bad input" (exit 2); anything else is an internal error (exit 3).
 #pragma once
 
+#include <cstddef>
+#include <new>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace qm3d {
 
@@ -35,5 +38,21 @@ class NumericError : public Error {
  public:
   using Error::Error;
 };
+
+/// A computation refused up front because it would not fit in memory (its estimate exceeds what
+/// the process may allocate). A std::bad_alloc, so that it reads as "out of memory" everywhere
+/// (exit 3 in the tool, MemoryError in Python), with the estimate in what().
+class MemoryLimitError : public std::bad_alloc {
+ public:
+  explicit MemoryLimitError(std::string message) : message_(std::move(message)) {}
+  const char* what() const noexcept override { return message_.c_str(); }
+
+ private:
+  std::string message_;
+};
+
+/// The bytes this process may allocate: the smaller of the physical memory and the address-space
+/// limit (ulimit -v); 0 when neither is known.
+std::size_t memory_limit_bytes();
 
 }  // namespace qm3d

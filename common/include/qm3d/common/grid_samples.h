@@ -29,6 +29,14 @@ FloatBox vertex_box(const std::vector<Float3>& positions);
 /// The union of two boxes (the CTC's shared box of a pair).
 FloatBox union_box(const FloatBox& a, const FloatBox& b);
 
+/// A warning for `name` when its box [min, max] lies so far from the origin that float32 (the
+/// arithmetic of `tool`: pc_error, mmetric, its renderer) rounds its coordinates by more than
+/// 1/8 of `spacing` (described as `spacing_name`; the rule of the readers' float32_rounding_warning, qm3d/common/reading.h),
+/// naming the cause and the remedy (move the content near the origin); empty when it does not.
+std::string float32_precision_warning(const Vec3& min, const Vec3& max, double spacing,
+                                      const std::string& spacing_name, const std::string& name,
+                                      const std::string& tool);
+
 struct GridSamplingOptions {
   /// Grid nodes along the box's longest side (mmetric's --gridSize; the CTC uses 1024).
   int grid_size = 1024;
@@ -52,6 +60,9 @@ struct GridSamples {
   float step = 0;      ///< the grid step
   std::size_t degenerate_faces = 0;    ///< faces skipped (area below DBL_EPSILON)
   std::size_t duplicate_samples = 0;   ///< samples dropped as equal to an earlier one
+  /// Faces with the same corners as an earlier face (sampled once: mmetric drops every sample
+  /// of a repeat as a duplicate, counted in duplicate_samples).
+  std::size_t repeated_faces = 0;
   /// Faces skipped, mesh vertices outside the given box.
   std::vector<std::string> warnings;
 };

@@ -217,6 +217,13 @@ struct MetricSpec {
   /// The metric reads its input files itself (GeodesicPSIM: an OBJ and its texture as its
   /// reference reads them): run_metric does not load them (no second copy in memory).
   bool reads_files = false;
+  /// With reads_two_meshes_as_meshes: two meshes are scored on samples of their surfaces (psnr's
+  /// grid samples), so their per-element values are not on the meshes' vertices.
+  bool two_meshes_scored_on_samples = false;
+  /// Whether this pair's per-element values are on its inputs' elements (a map or a report
+  /// layer can be drawn on them): per_element_on_input, but not for two meshes scored on
+  /// samples.
+  bool per_element_on_inputs(const Input& reference, const Input& distorted) const;
 
   const std::string& model_name() const { return model_metric.empty() ? name : model_metric; }
   std::vector<OptionSpec> options;

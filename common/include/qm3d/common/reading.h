@@ -78,6 +78,10 @@ struct ColourConversion {
 ColourConversion colour_conversion(const ColourValues& values, ColourScale scale,
                                    const std::string& file);
 
+/// The float32 step at |coordinate| `largest` when it is more than 1/8 of `spacing` (the content
+/// has lost detail in float32: float32_rounding_warning's rule), else nullopt.
+std::optional<double> large_float32_step(double largest, double spacing);
+
 /// The warning for coordinates stored as float32 whose rounding is large against the points'
 /// spacing, or nothing. "Large": the float32 step (ulp) at the largest |coordinate| exceeds 1/8
 /// of the typical spacing, estimated as bounding-box diagonal / sqrt(N) (N points on a

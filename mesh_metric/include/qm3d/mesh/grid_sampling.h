@@ -39,8 +39,10 @@ constexpr std::size_t kMaxGridSamples = 500000000;
 
 /// Samples `mesh` (colours: its vertex colours when `mesh.colors` is not empty, else none).
 /// Throws std::invalid_argument for a grid size below 2 or above 1,000,000, NumericError when
-/// the box is flat on two axes (no rays) or not finite, the grid gives no samples, or the
-/// samples would exceed kMaxGridSamples.
+/// the box is flat on two axes (no rays) or not finite, the grid gives no samples, or mmetric's
+/// float32 arithmetic overflows (coordinates beyond about 1e12), MemoryLimitError (before
+/// sampling, with the estimate) when the estimated samples exceed kMaxGridSamples or the memory
+/// the process may use. Faces with the same corners as an earlier one are sampled once.
 GridSamples sample_grid(const ColoredMesh& mesh, const GridSamplingOptions& options);
 /// Samples a textured mesh: colours from its textures at each sample's UV.
 GridSamples sample_grid(const TexturedMesh& mesh, const GridSamplingOptions& options);
