@@ -151,14 +151,15 @@ TextureImage flat_texture(const Rgb& c) { return TextureImage{1, 1, {c}}; }
 
 // Why an OBJ's materials give no usable texture: no mtllib, a material file or texture map that
 // is not there, a face without a material, a material no mtllib defines. Empty when they are
-// usable (an image that is there but cannot be decoded is an error, found when it is read).
+// usable. A file that is there but cannot be read (a device, a directory) or decoded is an error,
+// found when it is read.
 std::string unusable_materials(const ObjTexturing& t, const std::filesystem::path& obj,
                                std::map<std::string, Material>& materials) {
   std::error_code ec;
   if (t.mtllibs.empty()) return "no mtllib: the OBJ names no material file";
   for (const std::string& lib : t.mtllibs) {
     const std::filesystem::path mtl = obj.parent_path() / lib;
-    if (!std::filesystem::is_regular_file(mtl, ec)) {
+    if (!std::filesystem::exists(mtl, ec)) {
       return "its material file " + mtl.string() + " is not there";
     }
     auto read = read_mtl(mtl);
@@ -169,7 +170,7 @@ std::string unusable_materials(const ObjTexturing& t, const std::filesystem::pat
     if (name.empty()) return "face " + std::to_string(p) + " has no material (usemtl)";
     const auto m = materials.find(name);
     if (m == materials.end()) return "material '" + name + "' is in no mtllib";
-    if (!m->second.map_kd.empty() && !std::filesystem::is_regular_file(m->second.map_kd, ec)) {
+    if (!m->second.map_kd.empty() && !std::filesystem::exists(m->second.map_kd, ec)) {
       return "the texture map " + m->second.map_kd.string() + " of material '" + name +
              "' is not there";
     }
@@ -400,7 +401,7 @@ std::vector<std::filesystem::path> ply_maps(const ply::Content& c,
   std::error_code ec;
   for (const std::string& name : c.texture_files) {
     maps.push_back(path.parent_path() / name);
-    if (!std::filesystem::is_regular_file(maps.back(), ec)) {
+    if (!std::filesystem::exists(maps.back(), ec)) {
       why = "its texture map " + maps.back().string() + " (comment TextureFile) is not there";
       return {};
     }
