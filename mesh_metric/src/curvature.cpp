@@ -120,13 +120,19 @@ double curvature_of(const Tensor& t, double maxdim) { return t.valid ? post_proc
 
 }  // namespace
 
-std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
-  std::size_t count = 0;
+ShortEdges edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
+  ShortEdges count;
   for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
     for (std::uint32_t k = mesh.rings.begin(v); k < mesh.rings.end(v); ++k) {
       const std::uint32_t w = mesh.rings.source[k];
+      if (w <= v) continue;
       const Vec3 e = sub(mesh.positions[w], mesh.positions[v]);
-      if (w > v && std::fabs(dot(e, e)) < kClipEpsilon) ++count;
+      const double squared = dot(e, e);
+      if (squared == 0.0) {
+        ++count.zero;
+      } else if (std::fabs(squared) < kClipEpsilon) {
+        ++count.tiny;
+      }
     }
   }
   return count;

@@ -44,8 +44,14 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
 /// with edges shorter than sqrt(epsilon) = 1.5e-8 (in the mesh's units).
 constexpr double kClipEpsilon = std::numeric_limits<double>::epsilon();
 
-/// The number of edges shorter than sqrt(kClipEpsilon), each counted once.
-std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh);
+/// Edges shorter than sqrt(kClipEpsilon), each counted once: those of length zero (two
+/// vertices at one position, e.g. merged by quantisation: inside every sphere at any scale) and
+/// the others (inside every sphere only because the mesh is small: scale-dependent).
+struct ShortEdges {
+  std::size_t zero = 0;
+  std::size_t tiny = 0;
+};
+ShortEdges edges_under_clip_epsilon(const HalfedgeMesh& mesh);
 
 /// MEPP2's sphere_clip_vector (ClippingAndIntersection.hpp): clips `v`, starting at `p`, to the
 /// sphere (o, r). Returns true when the segment crosses the sphere ("isect").

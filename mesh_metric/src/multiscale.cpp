@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <list>
 #include <future>
+#include <list>
 #include <optional>
 #include <stdexcept>
 
@@ -14,6 +14,7 @@
 #include "neighbourhood.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
+#include "qm3d/common/warning.h"
 
 namespace qm3d::mesh::detail {
 namespace {
@@ -51,15 +52,32 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
 }
 
 // MEPP2's curvature ignores edges shorter than 1.5e-8 whatever the mesh's size (kClipEpsilon):
-// reproduced, and said, since the curvature features then depend on the mesh's scale.
-void warn_small_edges(HalfedgeMesh& m, const std::string& name) {
-  const std::size_t edges = edges_under_clip_epsilon(m);
-  if (edges == 0) return;
-  m.warnings.push_back(name + ": " + std::to_string(edges) +
-                       " edges are shorter than 1.5e-8 (the mesh's units): MEPP2's curvature "
-                       "takes them as inside every neighbourhood (an absolute epsilon, "
-                       "reproduced), so the curvature features are not scale-invariant here; "
-                       "scale both meshes up (e.g. to a bounding box of about 1)");
+// reproduced, and said. Edges of length zero (vertices merged onto one position, as a quantiser
+// does) are inside every sphere at any scale: nothing to scale, only to weld. The others make
+// the curvature features depend on the mesh's scale: scaling up helps when the mesh is small.
+void warn_small_edges(HalfedgeMesh& m, const std::string& name, double box_size) {
+  const ShortEdges edges = edges_under_clip_epsilon(m);
+  if (edges.zero > 0) {
+    m.warnings.push_back(
+        make_warning(name,
+                     std::to_string(edges.zero) +
+                         " edges have zero length (distinct vertices at one position, e.g. "
+                         "merged by quantisation)",
+                     "weld duplicate vertices if unintended")
+            .line);
+  }
+  if (edges.tiny == 0) return;
+  // A mesh whose box is below this has its detail near MEPP2's absolute epsilon: scale it up.
+  constexpr double kSmallBox = 1e-3;
+  const std::string remedy = box_size < kSmallBox
+                                 ? "scale both meshes up to a box of about 1"
+                                 : "weld near-coincident vertices";
+  m.warnings.push_back(make_warning(name,
+                                    std::to_string(edges.tiny) +
+                                        " edges are shorter than 1.5e-8, MEPP2's absolute "
+                                        "epsilon: curvature depends on scale",
+                                    remedy)
+                           .line);
 }
 
 PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
@@ -71,7 +89,7 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
-  warn_small_edges(p.mesh, name);
+  warn_small_edges(p.mesh, name, p.box_size);
   return p;
 }
 
