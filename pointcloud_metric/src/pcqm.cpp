@@ -77,7 +77,7 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
   if (std::abs(quirk - extent) > kBboxQuirkWarningGap * extent) {
     add_warning(result,
                 make_warning("PCQM",
-                             "the " + name + " cloud is off-centre: box size |min|+|max| " +
+                             "the " + name + " cloud is off-centre: box size |min| + |max| " +
                                  number(quirk) + ", not its longest side " + number(extent),
                              "--bbox extent is translation-invariant",
                              "The reference implementation takes max over axes of |min| + |max| as "
@@ -119,7 +119,7 @@ void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_
     add_warning(result,
                 make_warning("PCQM",
                              share(out.underdetermined_curvature) + name +
-                                 " points have too few neighbours for a curvature fit",
+                                 " points have an underdetermined curvature fit (too few neighbours)",
                              remedy,
                              "Quadric on the points within the curvature radius " +
                                  number(o.radius_rel, 3) +
