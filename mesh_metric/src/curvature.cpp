@@ -171,7 +171,7 @@ std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius,
 std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
                                                       const std::vector<double>& radii,
                                                       double maxdim, CurvatureVariant variant,
-                                                      int threads) {
+                                                      int threads, LoopProgress* progress) {
   if (!std::is_sorted(radii.begin(), radii.end())) {
     throw std::invalid_argument("processed_curvatures: the radii must not decrease");
   }
@@ -185,6 +185,7 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
     for (std::int64_t v = 0; v < n; ++v) {
       vertex_tensors(mesh, static_cast<std::uint32_t>(v), radii, variant, scratch, tensors);
       for (std::size_t j = 0; j < radii.size(); ++j) curvatures[j][v] = curvature_of(tensors[j], maxdim);
+      if (progress) progress->add();
     }
   }
   return curvatures;

@@ -125,13 +125,14 @@ class CurvatureCache {
   /// The curvature of `mesh` at each of `radii` (increasing), those not yet known computed in
   /// one walk per vertex; the references stay valid until release(mesh).
   std::vector<const std::vector<double>*> get(const HalfedgeMesh& mesh,
-                                              const std::vector<double>& radii, double maxdim) {
+                                              const std::vector<double>& radii, double maxdim,
+                                              LoopProgress* progress = nullptr) {
     std::vector<double> missing;
     for (double r : radii) {
       if (!find(mesh, r, maxdim)) missing.push_back(r);
     }
     if (!missing.empty()) {
-      auto values = processed_curvatures(mesh, missing, maxdim, variant_, threads_);
+      auto values = processed_curvatures(mesh, missing, maxdim, variant_, threads_, progress);
       for (std::size_t j = 0; j < missing.size(); ++j) {
         entries_.push_back({&mesh, missing[j], maxdim, std::move(values[j])});
       }
@@ -172,8 +173,9 @@ constexpr int kScalesPerWalk = 8;
 void accumulate_scales(const std::vector<MatchedFields>& levels,
                        const std::vector<WalkParameters>& walks,
                        const FeatureConventions& conventions, std::vector<FeatureVector>& sums,
-                       int threads) {
+                       int threads, ProgressSteps& progress) {
   const auto n = static_cast<std::int64_t>(sums.size());
+  LoopProgress done(&progress, sums.size());
   const bool with_color = levels.front().color != nullptr;
 #pragma omp parallel num_threads(threads)
   {
@@ -187,6 +189,7 @@ void accumulate_scales(const std::vector<MatchedFields>& levels,
             with_color ? local_features(s, conventions) : curvature_features(s, conventions);
         for (std::size_t k = 0; k < kNumFeatures; ++k) sums[v][k] += f[k];
       }
+      done.add();
     }
   }
 }
@@ -219,13 +222,15 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
       rc += def.radius_step;
     }
     progress.begin(label + ": curvature, " + which, end - first);
+    LoopProgress curvature_done(&progress,
+                                other.mesh.positions.size() + iterated.mesh.positions.size());
     // The other mesh's first: only their values at the matched points are kept.
     std::vector<std::vector<double>> curv_match;
-    for (const auto* c : curvatures.get(other.mesh, radii, maxdim)) {
+    for (const auto* c : curvatures.get(other.mesh, radii, maxdim, &curvature_done)) {
       curv_match.push_back(interpolate_all(matches, other.mesh, *c));
     }
     curvatures.release(other.mesh);
-    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim);
+    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
     std::vector<MatchedFields> levels;
     for (int j = 0; j < end - first; ++j) {
       levels.push_back({&iterated.mesh, &matched_point, curv1[j], &curv_match[j],
@@ -233,7 +238,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
                         def.uses_color ? &lab_match : nullptr});
     }
     progress.begin(label + ": neighbourhoods, " + which, end - first);
-    accumulate_scales(levels, walks, def.conventions, sums, threads);
+    accumulate_scales(levels, walks, def.conventions, sums, threads, progress);
     curvatures.release(iterated.mesh);
   }
   return sums;
