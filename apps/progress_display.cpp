@@ -53,7 +53,7 @@ class Display {
     stage_ = stage;
     fraction_ = fraction;
     if (!in_place_) {
-      if (new_stage && fraction < 1) std::cerr << "qm3d: " << line(now) << "\n";
+      if (new_stage) std::cerr << "qm3d: " << line(now) << "\n";  // done included
       return;
     }
     if (fraction >= 1) {

@@ -192,6 +192,7 @@ void accumulate_scales(const std::vector<MatchedFields>& levels,
       done.add();
     }
   }
+  done.finish();
 }
 
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
@@ -231,6 +232,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
     }
     curvatures.release(other.mesh);
     const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
+    curvature_done.finish();
     std::vector<MatchedFields> levels;
     for (int j = 0; j < end - first; ++j) {
       levels.push_back({&iterated.mesh, &matched_point, curv1[j], &curv_match[j],

@@ -334,6 +334,7 @@ void for_each_batch(const KdTree& tree, int threads, ProgressSteps* progress, Vi
       done.add(batch[1] - batch[0]);
     }
   }
+  done.finish();
 }
 
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,

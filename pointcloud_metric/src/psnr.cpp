@@ -348,6 +348,7 @@ PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tr
     partial[c] = s;
     if (p.progress) p.progress->add(last - first);
   }
+  if (p.progress) p.progress->finish();
   for (const PassSums& s : partial) out.sums.add(s);  // in chunk order: any thread count
   return out;
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <thread>
 
 #include "progress_recorder.h"
@@ -77,6 +78,18 @@ TEST_F(ProgressStepsTest, LoopProgressReportsEachHundredthFromItsOwnThreadOnly) 
     EXPECT_LE(calls_[i - 1].second, calls_[i].second);
   }
   EXPECT_DOUBLE_EQ(calls_.back().second, 0.5);  // the stage's whole share, not more
+}
+
+// A callback that throws (a cancelled call) never throws out of the loop: finish() rethrows.
+TEST(LoopProgress, WhatTheCallbackThrowsComesOutOfFinish) {
+  ProgressSteps steps([](const std::string&, double f) {
+    if (f > 0) throw std::runtime_error("cancelled");
+  }, 1);
+  steps.begin("loop");
+  LoopProgress loop(&steps, 10);
+  for (int i = 0; i < 10; ++i) EXPECT_NO_THROW(loop.add());
+  EXPECT_THROW(loop.finish(), std::runtime_error);
+  EXPECT_NO_THROW(loop.finish());  // once
 }
 
 TEST(LoopProgress, WithoutAListenerItOnlyCounts) {

@@ -9,6 +9,7 @@
 #include <functional>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "disposable_inputs.h"
@@ -412,6 +413,12 @@ TEST(Pcqm, LongStagesReportFromInsideTheirLoops) {
   const MetricResult without = compute_pcqm(ref, dist, o);
   EXPECT_EQ(without.score, with.score);
   EXPECT_EQ(without.ref_to_dist->features, with.ref_to_dist->features);
+  // A callback that throws from inside a parallel loop (Python's Ctrl-C): the metric throws it
+  // after the loop, no std::terminate.
+  o.progress = [](const std::string& stage, double f) {
+    if (stage == "ref→dist: features" && f > 2.0 / 3.0) throw std::runtime_error("cancelled");
+  };
+  EXPECT_THROW(compute_pcqm(head(ref, 5000), head(dist, 5000), o), std::runtime_error);
 }
 
 TEST(Pcqm, IdentityGivesZero) {

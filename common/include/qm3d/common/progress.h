@@ -12,12 +12,14 @@
 //   LoopProgress loop(&steps, n);          // n items in this stage
 //   #pragma omp parallel for schedule(dynamic, 256)
 //   for (long i = 0; i < n; ++i) { ...; loop.add(1); }   // any thread; only the caller reports
+//   loop.finish();                         // rethrows what the callback threw (e.g. cancelled)
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <string>
 #include <thread>
@@ -98,7 +100,18 @@ class LoopProgress {
     if (hundredth <= last_hundredth_ && now - last_time_ < kInterval) return;
     last_hundredth_ = hundredth;
     last_time_ = now;
-    steps_->within(static_cast<double>(std::min(done, total_)) / static_cast<double>(total_));
+    if (error_) return;
+    // The callback may throw (a cancelled call, a Python callback's exception): never out of
+    // the parallel loop (std::terminate); kept for finish().
+    try {
+      steps_->within(static_cast<double>(std::min(done, total_)) / static_cast<double>(total_));
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+  }
+  /// After the loop, outside any parallel region: rethrows what the callback threw.
+  void finish() {
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
   }
 
  private:
@@ -108,6 +121,7 @@ class LoopProgress {
   std::atomic<std::size_t> done_{0};
   std::size_t last_hundredth_ = 0;
   std::chrono::steady_clock::time_point last_time_;
+  std::exception_ptr error_;  ///< what the callback threw (read and written by the owner only)
 };
 
 }  // namespace qm3d
