@@ -96,7 +96,8 @@ PYEOF
 # With its dependencies: numpy is declared and Debian's satisfies it, offline.
 quietly "$VPY" -m pip install --no-index --no-cache-dir "$WHEEL"
 
-SCORE='import qm3d, sys
+SCORE='import qm3d, sys, warnings
+warnings.simplefilter("ignore", qm3d.Qm3dWarning)  # stderr: the paths only
 r = qm3d.pcqm(sys.argv[1], sys.argv[2])
 print(qm3d.__file__, file=sys.stderr)
 print(repr(r.score), sorted((k, repr(v)) for k, v in r.features.items()))'

@@ -88,7 +88,8 @@ log "pip install $(basename "$WHEEL")"
 quietly "$VPY" -m pip install --no-index --no-deps --no-cache-dir "$WHEEL"
 
 # The pair's score and features (17 digits) from a package; the tables it read on stderr.
-SCORE='import qm3d, sys
+SCORE='import qm3d, sys, warnings
+warnings.simplefilter("ignore", qm3d.Qm3dWarning)  # stderr: the paths only
 r = qm3d.pcqm(sys.argv[1], sys.argv[2])
 print(qm3d.__file__, qm3d._qm3d.__file__, r.to_dict()["options"]["data_dir"], sep="\n",
       file=sys.stderr)
