@@ -32,6 +32,23 @@ from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 
 ROOT = Path(__file__).resolve().parent
+sys.path.insert(0, str(ROOT / "python" / "build_support"))
+
+
+def bdist_wheel_command():
+    """setuptools' own bdist_wheel (>= 70.1) or the `wheel` package's when either is there;
+    else qm3d's (python/build_support/bdist_wheel_fallback.py): no `wheel` package needed."""
+    try:
+        from setuptools.command.bdist_wheel import bdist_wheel  # setuptools >= 70.1
+        return None
+    except ImportError:
+        pass
+    try:
+        import wheel.bdist_wheel  # noqa: F401  (registers itself as a setuptools command)
+        return None
+    except ImportError:
+        from bdist_wheel_fallback import bdist_wheel
+        return bdist_wheel
 # The five tables the colour conversion reads (common/src/color.cpp) and the licence that must
 # travel with them (MPL-2.0: MEPP-team/PCQM resources/).
 TABLE_FILES = ("L_data.txt", "RegularGrid_0_0_1.txt", "RegularGrid_0_0_2.txt",
@@ -133,6 +150,7 @@ class CMakeBuild(build_ext):
 
 
 (ROOT / BUILD_BASE).mkdir(exist_ok=True)  # egg_info wants its folder to exist
+BDIST_WHEEL = bdist_wheel_command()
 # package_dir/packages here rather than in pyproject.toml's [tool.setuptools], which Debian 12's
 # setuptools 66 calls beta (a warning on every build). The tables are not package data of the
 # source tree: build_ext adds them from where CMake found them.
@@ -141,6 +159,7 @@ setup(version=project_version(),
       packages=["qm3d"],
       include_package_data=False,
       ext_modules=[CMakeExtension("qm3d._qm3d")],
-      cmdclass={"build_ext": CMakeBuild},
+      cmdclass={"build_ext": CMakeBuild,
+                **({"bdist_wheel": BDIST_WHEEL} if BDIST_WHEEL else {})},
       options={"build": {"build_base": BUILD_BASE}, "egg_info": {"egg_base": BUILD_BASE}},
       zip_safe=False)

@@ -4,11 +4,104 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <iomanip>
 #include <iostream>
+#include <memory>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 namespace qm3d::app {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+/// How often a line on a terminal is rewritten while the metric reports nothing (the clock and
+/// the estimate keep moving), and the shortest time between two rewrites by the metric.
+constexpr std::chrono::milliseconds kTick{500};
+constexpr std::chrono::milliseconds kMinRewrite{100};
+/// No estimate before this share of the work or this many seconds (too noisy).
+constexpr double kEstimateFromFraction = 0.02;
+constexpr double kEstimateFromSeconds = 1.0;
+
+/// The progress of one metric on stderr; on a terminal, a ticker thread rewrites the line every
+/// kTick until the metric is done or the display is destroyed (also when the metric fails).
+class Display {
+ public:
+  Display(std::string metric, bool in_place) : metric_(std::move(metric)), in_place_(in_place) {}
+  ~Display() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (in_place_ && started_ && !stop_) std::cerr << "\r\033[K" << std::flush;  // not done
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (ticker_.joinable()) ticker_.join();
+  }
+  Display(const Display&) = delete;
+  Display& operator=(const Display&) = delete;
+
+  void report(const std::string& stage, double fraction) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const auto now = Clock::now();
+    if (fraction == 0 && !started_) {  // the metric's first stage (each run starts at 0)
+      start_ = now;
+      started_ = true;
+    }
+    const bool new_stage = stage != stage_;
+    stage_ = stage;
+    fraction_ = fraction;
+    if (!in_place_) {
+      if (new_stage) std::cerr << "qm3d: " << line(now) << "\n";  // done included
+      return;
+    }
+    if (fraction >= 1) {
+      stop_ = true;
+      std::cerr << "\r\033[K" << std::flush;  // done: leave the terminal as it was
+      lock.unlock();
+      wake_.notify_all();
+      return;
+    }
+    if (new_stage || now - written_ >= kMinRewrite) write(now);
+    if (!ticker_.joinable() && !stop_) ticker_ = std::thread([this] { tick(); });
+  }
+
+ private:
+  std::string line(Clock::time_point now) const {
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    std::ostringstream o;
+    o << metric_ << ": " << std::setw(3) << std::lround(100 * fraction_) << "%  " << stage_ << "  ("
+      << format_duration(elapsed);
+    if (fraction_ >= kEstimateFromFraction && elapsed >= kEstimateFromSeconds) {
+      o << ", ~" << format_duration(elapsed * (1 - fraction_) / fraction_) << " left";
+    }
+    o << ")";
+    return o.str();
+  }
+  void write(Clock::time_point now) {                          // mutex_ held
+    std::cerr << "\r" << line(now) << "\033[K" << std::flush;  // \033[K: erase to line end
+    written_ = now;
+  }
+  void tick() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, kTick, [this] { return stop_; })) {
+      if (Clock::now() - written_ >= kTick) write(Clock::now());
+    }
+  }
+
+  const std::string metric_;
+  const bool in_place_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::thread ticker_;
+  bool started_ = false, stop_ = false;
+  Clock::time_point start_{}, written_{};
+  std::string stage_;
+  double fraction_ = 0;
+};
+
+}  // namespace
 
 std::string format_duration(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
@@ -27,23 +120,8 @@ void clear_progress_line() {
 }
 
 ProgressCallback stderr_progress(const std::string& metric, bool in_place) {
-  using Clock = std::chrono::steady_clock;
-  return [metric, in_place, start = Clock::time_point{}](const std::string& stage,
-                                                         double fraction) mutable {
-    const auto now = Clock::now();
-    if (fraction == 0) start = now;  // the metric's first stage (each run starts at 0)
-    const double elapsed = std::chrono::duration<double>(now - start).count();
-    std::ostringstream line;
-    line << metric << ": " << std::setw(3) << std::lround(100 * fraction) << "%  " << stage
-         << "  (" << format_duration(elapsed) << ")";
-    if (!in_place) {
-      std::cerr << "qm3d: " << line.str() << "\n";
-    } else if (fraction < 1) {
-      std::cerr << "\r" << line.str() << "\033[K" << std::flush;  // \033[K: erase to line end
-    } else {
-      std::cerr << "\r\033[K" << std::flush;  // done: leave the terminal as it was
-    }
-  };
+  auto display = std::make_shared<Display>(metric, in_place);
+  return [display](const std::string& stage, double fraction) { display->report(stage, fraction); };
 }
 
 }  // namespace qm3d::app

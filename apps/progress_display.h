@@ -18,9 +18,11 @@ bool stderr_is_terminal();
 /// nothing otherwise.
 void clear_progress_line();
 
-/// A callback that shows `metric`'s progress on stderr with the time elapsed since its first stage.
-/// `in_place`: rewrite one line (a terminal), erased when the metric is done; otherwise print a
-/// line per stage.
+/// A callback that shows `metric`'s progress on stderr: percentage, stage, the time elapsed
+/// since its first stage and an estimate of the time left. `in_place`: rewrite one line (a
+/// terminal) as the metric reports and at least every half second (a ticker thread, stopped
+/// when the metric is done or the last copy of the callback is destroyed), erased when the
+/// metric is done; otherwise print a line per stage.
 ProgressCallback stderr_progress(const std::string& metric, bool in_place);
 
 }  // namespace qm3d::app

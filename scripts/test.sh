@@ -53,4 +53,9 @@ if [ ${#EXTRA[@]} -eq 0 ]; then
   wheel_rc=0
   bash "$ROOT/tests/python_package/test_wheel.sh" "$BUILD_DIR" || wheel_rc=$?
   [ "$wheel_rc" -eq 0 ] || [ "$wheel_rc" -eq 77 ] || exit "$wheel_rc"
+  # The wheel for another CPython of the same minor version (pyenv's), offline, with Debian's
+  # numpy (exit 77: skipped, no such interpreter).
+  other_rc=0
+  bash "$ROOT/tests/python_package/test_other_python.sh" "$BUILD_DIR" || other_rc=$?
+  [ "$other_rc" -eq 0 ] || [ "$other_rc" -eq 77 ] || exit "$other_rc"
 fi

@@ -20,6 +20,7 @@
 #include "qm3d/common/ply.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
+#include "qm3d/common/warning.h"
 
 namespace qm3d {
 namespace {
@@ -713,6 +714,7 @@ MetricResult run_metric(const MetricSpec& spec, const Input& reference, const In
                        ", distorted " + distorted.name() + ")");
   }
   result.warnings.insert(result.warnings.begin(), reading.begin(), reading.end());
+  fit_warnings(result, {reference.name(), distorted.name()});
   result.provenance.version = kVersion;
   // A metric that follows one of several tools by input kind names the one it followed.
   if (result.provenance.reproduces.empty()) result.provenance.reproduces = spec.reproduces;

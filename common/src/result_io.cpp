@@ -139,6 +139,11 @@ nlohmann::json to_json(const MetricResult& r) {
   }
   for (const auto& [key, value] : r.details.items()) j[key] = value;
   j["warnings"] = r.warnings;
+  // What each warning line leaves out (warning.h): [{warning, details}], empty when none.
+  j["warning_details"] = nlohmann::json::array();
+  for (const WarningDetails& d : r.warning_details) {
+    j["warning_details"].push_back({{"warning", d.warning}, {"details", d.details}});
+  }
   return j;
 }
 

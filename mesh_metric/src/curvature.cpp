@@ -120,13 +120,19 @@ double curvature_of(const Tensor& t, double maxdim) { return t.valid ? post_proc
 
 }  // namespace
 
-std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
-  std::size_t count = 0;
+ShortEdges edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
+  ShortEdges count;
   for (std::uint32_t v = 0; v < mesh.positions.size(); ++v) {
     for (std::uint32_t k = mesh.rings.begin(v); k < mesh.rings.end(v); ++k) {
       const std::uint32_t w = mesh.rings.source[k];
+      if (w <= v) continue;
       const Vec3 e = sub(mesh.positions[w], mesh.positions[v]);
-      if (w > v && std::fabs(dot(e, e)) < kClipEpsilon) ++count;
+      const double squared = dot(e, e);
+      if (squared == 0.0) {
+        ++count.zero;
+      } else if (std::fabs(squared) < kClipEpsilon) {
+        ++count.tiny;
+      }
     }
   }
   return count;
@@ -165,7 +171,7 @@ std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius,
 std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
                                                       const std::vector<double>& radii,
                                                       double maxdim, CurvatureVariant variant,
-                                                      int threads) {
+                                                      int threads, LoopProgress* progress) {
   if (!std::is_sorted(radii.begin(), radii.end())) {
     throw std::invalid_argument("processed_curvatures: the radii must not decrease");
   }
@@ -179,6 +185,7 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
     for (std::int64_t v = 0; v < n; ++v) {
       vertex_tensors(mesh, static_cast<std::uint32_t>(v), radii, variant, scratch, tensors);
       for (std::size_t j = 0; j < radii.size(); ++j) curvatures[j][v] = curvature_of(tensors[j], maxdim);
+      if (progress) progress->add();
     }
   }
   return curvatures;

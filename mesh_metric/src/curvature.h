@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "halfedge_mesh.h"
+#include "qm3d/common/progress.h"
 
 namespace qm3d::mesh::detail {
 
@@ -30,11 +31,12 @@ std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius,
 /// (walk_outward_levels): the same edges contribute at each radius as in a walk at that radius
 /// alone, summed in another order, so the values may differ from processed_curvature's by
 /// rounding. MEPP2's walks are written one radius at a time; the metrics use this one, and the
-/// tests check one against the other.
+/// tests check one against the other. Each vertex done is counted in `progress` (may be null).
 std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
                                                       const std::vector<double>& radii,
                                                       double maxdim, CurvatureVariant variant,
-                                                      int threads);
+                                                      int threads,
+                                                      LoopProgress* progress = nullptr);
 
 /// The absolute epsilon of MEPP2's sphere_clip_vector: an edge vector whose squared length is
 /// below it is taken as inside the sphere, whatever the radius (MEPP2 commit d977d05,
@@ -44,8 +46,14 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
 /// with edges shorter than sqrt(epsilon) = 1.5e-8 (in the mesh's units).
 constexpr double kClipEpsilon = std::numeric_limits<double>::epsilon();
 
-/// The number of edges shorter than sqrt(kClipEpsilon), each counted once.
-std::size_t edges_under_clip_epsilon(const HalfedgeMesh& mesh);
+/// Edges shorter than sqrt(kClipEpsilon), each counted once: those of length zero (two
+/// vertices at one position, e.g. merged by quantisation: inside every sphere at any scale) and
+/// the others (inside every sphere only because the mesh is small: scale-dependent).
+struct ShortEdges {
+  std::size_t zero = 0;
+  std::size_t tiny = 0;
+};
+ShortEdges edges_under_clip_epsilon(const HalfedgeMesh& mesh);
 
 /// MEPP2's sphere_clip_vector (ClippingAndIntersection.hpp): clips `v`, starting at `p`, to the
 /// sphere (o, r). Returns true when the segment crosses the sphere ("isect").

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <list>
 #include <future>
+#include <list>
 #include <optional>
 #include <stdexcept>
 
@@ -14,6 +14,7 @@
 #include "neighbourhood.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
+#include "qm3d/common/warning.h"
 
 namespace qm3d::mesh::detail {
 namespace {
@@ -51,15 +52,32 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
 }
 
 // MEPP2's curvature ignores edges shorter than 1.5e-8 whatever the mesh's size (kClipEpsilon):
-// reproduced, and said, since the curvature features then depend on the mesh's scale.
-void warn_small_edges(HalfedgeMesh& m, const std::string& name) {
-  const std::size_t edges = edges_under_clip_epsilon(m);
-  if (edges == 0) return;
-  m.warnings.push_back(name + ": " + std::to_string(edges) +
-                       " edges are shorter than 1.5e-8 (the mesh's units): MEPP2's curvature "
-                       "takes them as inside every neighbourhood (an absolute epsilon, "
-                       "reproduced), so the curvature features are not scale-invariant here; "
-                       "scale both meshes up (e.g. to a bounding box of about 1)");
+// reproduced, and said. Edges of length zero (vertices merged onto one position, as a quantiser
+// does) are inside every sphere at any scale: nothing to scale, only to weld. The others make
+// the curvature features depend on the mesh's scale: scaling up helps when the mesh is small.
+void warn_small_edges(HalfedgeMesh& m, const std::string& name, double box_size) {
+  const ShortEdges edges = edges_under_clip_epsilon(m);
+  if (edges.zero > 0) {
+    m.warnings.push_back(
+        make_warning(name,
+                     std::to_string(edges.zero) +
+                         " edges have zero length (distinct vertices at one position, e.g. "
+                         "merged by quantisation)",
+                     "weld duplicate vertices if unintended")
+            .line);
+  }
+  if (edges.tiny == 0) return;
+  // A mesh whose box is below this has its detail near MEPP2's absolute epsilon: scale it up.
+  constexpr double kSmallBox = 1e-3;
+  const std::string remedy = box_size < kSmallBox
+                                 ? "scale both meshes up to a box of about 1"
+                                 : "weld near-coincident vertices";
+  m.warnings.push_back(make_warning(name,
+                                    std::to_string(edges.tiny) +
+                                        " edges are shorter than 1.5e-8, MEPP2's absolute "
+                                        "epsilon: curvature depends on scale",
+                                    remedy)
+                           .line);
 }
 
 PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const MultiscaleRun& run,
@@ -71,7 +89,7 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
-  warn_small_edges(p.mesh, name);
+  warn_small_edges(p.mesh, name, p.box_size);
   return p;
 }
 
@@ -107,13 +125,14 @@ class CurvatureCache {
   /// The curvature of `mesh` at each of `radii` (increasing), those not yet known computed in
   /// one walk per vertex; the references stay valid until release(mesh).
   std::vector<const std::vector<double>*> get(const HalfedgeMesh& mesh,
-                                              const std::vector<double>& radii, double maxdim) {
+                                              const std::vector<double>& radii, double maxdim,
+                                              LoopProgress* progress = nullptr) {
     std::vector<double> missing;
     for (double r : radii) {
       if (!find(mesh, r, maxdim)) missing.push_back(r);
     }
     if (!missing.empty()) {
-      auto values = processed_curvatures(mesh, missing, maxdim, variant_, threads_);
+      auto values = processed_curvatures(mesh, missing, maxdim, variant_, threads_, progress);
       for (std::size_t j = 0; j < missing.size(); ++j) {
         entries_.push_back({&mesh, missing[j], maxdim, std::move(values[j])});
       }
@@ -154,8 +173,9 @@ constexpr int kScalesPerWalk = 8;
 void accumulate_scales(const std::vector<MatchedFields>& levels,
                        const std::vector<WalkParameters>& walks,
                        const FeatureConventions& conventions, std::vector<FeatureVector>& sums,
-                       int threads) {
+                       int threads, ProgressSteps& progress) {
   const auto n = static_cast<std::int64_t>(sums.size());
+  LoopProgress done(&progress, sums.size());
   const bool with_color = levels.front().color != nullptr;
 #pragma omp parallel num_threads(threads)
   {
@@ -169,8 +189,10 @@ void accumulate_scales(const std::vector<MatchedFields>& levels,
             with_color ? local_features(s, conventions) : curvature_features(s, conventions);
         for (std::size_t k = 0; k < kNumFeatures; ++k) sums[v][k] += f[k];
       }
+      done.add();
     }
   }
+  done.finish();
 }
 
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
@@ -201,13 +223,16 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
       rc += def.radius_step;
     }
     progress.begin(label + ": curvature, " + which, end - first);
+    LoopProgress curvature_done(&progress,
+                                other.mesh.positions.size() + iterated.mesh.positions.size());
     // The other mesh's first: only their values at the matched points are kept.
     std::vector<std::vector<double>> curv_match;
-    for (const auto* c : curvatures.get(other.mesh, radii, maxdim)) {
+    for (const auto* c : curvatures.get(other.mesh, radii, maxdim, &curvature_done)) {
       curv_match.push_back(interpolate_all(matches, other.mesh, *c));
     }
     curvatures.release(other.mesh);
-    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim);
+    const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
+    curvature_done.finish();
     std::vector<MatchedFields> levels;
     for (int j = 0; j < end - first; ++j) {
       levels.push_back({&iterated.mesh, &matched_point, curv1[j], &curv_match[j],
@@ -215,7 +240,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
                         def.uses_color ? &lab_match : nullptr});
     }
     progress.begin(label + ": neighbourhoods, " + which, end - first);
-    accumulate_scales(levels, walks, def.conventions, sums, threads);
+    accumulate_scales(levels, walks, def.conventions, sums, threads, progress);
     curvatures.release(iterated.mesh);
   }
   return sums;

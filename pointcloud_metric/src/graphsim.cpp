@@ -151,10 +151,12 @@ GraphsimParams params_of(const OptionValues& o, bool multiscale) {
 /// Every keypoint's scores, in keypoint order (each keypoint's own: any thread count).
 std::vector<KeypointScores> score_all(const GraphsimCloud& ref, const GraphsimCloud& dist,
                                       const std::vector<std::size_t>& keys, double eps,
-                                      const GraphsimParams& params, int threads) {
+                                      const GraphsimParams& params, int threads,
+                                      ProgressSteps& progress) {
   std::vector<KeypointScores> out(keys.size());
   std::vector<std::exception_ptr> errors(keys.size());  // no exception leaves a parallel loop
   const long n = static_cast<long>(keys.size());
+  LoopProgress done(&progress, keys.size());
 #pragma omp parallel for num_threads(thread_count(threads)) schedule(dynamic, 1)
   for (long k = 0; k < n; ++k) {
     const auto i = static_cast<std::size_t>(k);
@@ -163,7 +165,9 @@ std::vector<KeypointScores> score_all(const GraphsimCloud& ref, const GraphsimCl
     } catch (...) {
       errors[i] = std::current_exception();
     }
+    done.add();
   }
+  done.finish();
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }
@@ -250,7 +254,7 @@ MetricResult run_graphsim(const std::string& metric, bool multiscale, const Inpu
   const GraphsimCloud d(dc.positions, colours_255(dc.colors), run.threads);
   if (run.inputs_done) run.inputs_done();
   progress.begin("keypoint graphs");
-  const std::vector<KeypointScores> scores = score_all(r, d, keys, eps, params, run.threads);
+  const std::vector<KeypointScores> scores = score_all(r, d, keys, eps, params, run.threads, progress);
   progress.finish();
   MetricResult result;
   result.metric = metric;

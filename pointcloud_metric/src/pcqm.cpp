@@ -12,6 +12,7 @@
 #include "qm3d/common/metric.h"
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/version.h"
+#include "qm3d/common/warning.h"
 #include "qm3d/pointcloud/cloud_io.h"
 #include "qm3d/pointcloud/metrics.h"
 
@@ -66,7 +67,7 @@ void validate(const ColoredCloud& cloud, const std::string& name) {
 
 /// maxDim of the iterated cloud per `mode`; warns when the reference's quirk is far off.
 double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name,
-               std::vector<std::string>& warnings) {
+               MetricResult& result) {
   const double extent = bounding_box(cloud.positions).longest_side();
   if (!(extent > 0)) {
     throw NumericError("PCQM: the " + name + " cloud's bounding box has zero size");
@@ -74,11 +75,16 @@ double max_dim(const ColoredCloud& cloud, BboxMode mode, const std::string& name
   if (mode == BboxMode::kExtent) return extent;
   const double quirk = detail::reference_max_dim(cloud.positions);
   if (std::abs(quirk - extent) > kBboxQuirkWarningGap * extent) {
-    warnings.push_back("PCQM: the " + name + " cloud's box size |min| + |max| = " + number(quirk) +
-                       " differs from its longest side " + number(extent) +
-                       " (the cloud does not straddle the origin); radii and curvatures follow "
-                       "the reference implementation's value; the extent bbox mode (qm3d --bbox extent) gives a "
-                       "translation-invariant score");
+    add_warning(result,
+                make_warning("PCQM",
+                             "the " + name + " cloud is off-centre: box size |min| + |max| " +
+                                 number(quirk) + ", not its longest side " + number(extent),
+                             "--bbox extent is translation-invariant",
+                             "The reference implementation takes max over axes of |min| + |max| as "
+                             "the box size that scales the radii and curvatures; on a cloud that "
+                             "does not straddle the origin it differs from the longest side, and "
+                             "the score depends on where the cloud is. qm3d follows the reference "
+                             "by default; --bbox extent uses the longest side."));
   }
   return quirk;
 }
@@ -96,46 +102,57 @@ double round_up_2(double v) {
 /// underdetermined on more than 1% of the points, with the setting that avoids it.
 void warn_of_underdetermined_fits(const detail::DirectionOutput& out, std::size_t points,
                                   const std::string& name, const PcqmOptions& o,
-                                  std::vector<std::string>& warnings) {
+                                  MetricResult& result) {
   const auto share = [points](std::size_t count) {
     return number(100.0 * double(count) / double(points), 3) + "% of the ";
   };
   const std::string consequence =
-      ": they are not determined by the points (fewer than six independent ones, or nearly so), "
+      "They are not determined by the points (fewer than six independent ones, or nearly so), "
       "so their values depend on the rounding of the linear-algebra library (the reference's "
-      "bundled Eigen 3.3.5 and Eigen 3.4 differ there; qm3d gives the Eigen 3.4 value)";
+      "bundled Eigen 3.3.5 and Eigen 3.4 differ there; qm3d gives the Eigen 3.4 value).";
   const double limit = detail::kUnderdeterminedShare * double(points);
   if (double(out.underdetermined_curvature) > limit) {
-    std::string w = "PCQM: " + share(out.underdetermined_curvature) + name +
-                    " cloud's points have an underdetermined curvature fit (quadric on the "
-                    "points within the curvature radius " + number(o.radius_rel, 3) +
-                    " x box size)" + consequence + " and so do F1-F3";
-    w += out.suggestion.radius_rel > 0
-             ? "; with a curvature radius of " + number(round_up_2(out.suggestion.radius_rel), 2) +
-                   " (qm3d --radius, reference -r) fewer than 0.5% of a sample of points are"
-             : "; no curvature radius up to 16 times this one avoids it";
-    warnings.push_back(w);
+    const std::string remedy =
+        out.suggestion.radius_rel > 0
+            ? "--radius " + number(round_up_2(out.suggestion.radius_rel), 2) + " avoids it"
+            : "no --radius up to 16x this one avoids it";
+    add_warning(result,
+                make_warning("PCQM",
+                             share(out.underdetermined_curvature) + name +
+                                 " points have an underdetermined curvature fit (too few neighbours)",
+                             remedy,
+                             "Quadric on the points within the curvature radius " +
+                                 number(o.radius_rel, 3) +
+                                 " x box size (reference -r); F1-F3 "
+                                 "depend on it. " +
+                                 consequence +
+                                 " The suggested radius leaves fewer than 0.5% of a sample of "
+                                 "points underdetermined."));
   }
   if (double(out.underdetermined_match) > limit) {
-    std::string w = "PCQM: " + share(out.underdetermined_match) + name +
-                    " cloud's points have an underdetermined correspondence fit (quadric on "
-                    "the " + std::to_string(o.knn) + " nearest points of the other cloud)" +
-                    consequence + " and so do the Gaussian weights of every feature";
-    w += out.suggestion.knn > 0
-             ? "; with knn " + std::to_string(out.suggestion.knn) +
-                   " (qm3d --knn, reference -knn) fewer than 0.5% of a sample of points are"
-             : "; no knn up to 16 times this one avoids it";
-    warnings.push_back(w);
+    const std::string remedy = out.suggestion.knn > 0
+                                   ? "--knn " + std::to_string(out.suggestion.knn) + " avoids it"
+                                   : "no --knn up to 16x this one avoids it";
+    add_warning(result, make_warning("PCQM",
+                                     share(out.underdetermined_match) + name +
+                                         " points have an underdetermined correspondence fit",
+                                     remedy,
+                                     "Quadric on the " + std::to_string(o.knn) +
+                                         " nearest points of the other cloud (reference -knn); the "
+                                         "Gaussian weights of every feature depend on it. " +
+                                         consequence +
+                                         " The suggested knn leaves fewer than 0.5% of a sample of "
+                                         "points underdetermined."));
   }
 }
 
 DirectionResult direction(const ColoredCloud& iterated, const ColoredCloud& other,
                           const std::string& iterated_name, const PcqmOptions& o,
                           const LinearModel& model, const Lab2000hlTable& table,
-                          std::vector<std::string>& warnings, std::string label,
-                          ProgressSteps& progress, std::function<void()> inputs_done) {
+                          MetricResult& result, std::string label, ProgressSteps& progress,
+                          std::function<void()> inputs_done) {
   detail::DirectionParams params;
-  params.max_dim = max_dim(iterated, o.bbox, iterated_name, warnings);
+  params.max_dim = max_dim(iterated, o.bbox, iterated_name, result);
   params.radius_rel = o.radius_rel;
   params.radius_factor = o.radius_factor;
   params.knn = static_cast<std::size_t>(o.knn);
@@ -145,7 +162,7 @@ DirectionResult direction(const ColoredCloud& iterated, const ColoredCloud& othe
   params.inputs_done = std::move(inputs_done);
   const std::size_t points = iterated.size();  // the clouds may be freed by inputs_done
   const detail::DirectionOutput out = detail::compute_direction(iterated, other, params, table);
-  warn_of_underdetermined_fits(out, points, iterated_name, o, warnings);
+  warn_of_underdetermined_fits(out, points, iterated_name, o, result);
 
   DirectionResult d;
   d.features = out.pooled;
@@ -178,13 +195,13 @@ MetricResult compute_pcqm(const ColoredCloud& reference, const ColoredCloud& dis
   MetricResult result;
   // The clouds may be freed once the last direction holds its own copies of them.
   if (dir != Direction::kDistToRef) {
-    result.ref_to_dist = direction(reference, distorted, "reference", options, model, *table,
-                                   result.warnings, "ref→dist", progress,
-                                   both ? nullptr : options.inputs_done);
+    result.ref_to_dist =
+        direction(reference, distorted, "reference", options, model, *table, result, "ref→dist",
+                  progress, both ? nullptr : options.inputs_done);
   }
   if (dir != Direction::kRefToDist) {
     result.dist_to_ref = direction(distorted, reference, "distorted", options, model, *table,
-                                   result.warnings, "dist→ref", progress, options.inputs_done);
+                                   result, "dist→ref", progress, options.inputs_done);
   }
   combine_directions(result);
   progress.finish();

@@ -318,23 +318,29 @@ std::vector<std::array<std::uint32_t, 2>> query_batches(const KdTree& tree) {
 }
 
 // Calls visit(batch, scratch) for every query batch of `tree`, in parallel, with one Scratch
-// per thread.
+// per thread; reports the points done to `progress` (may be null).
 template <typename Scratch, typename Visit>
-void for_each_batch(const KdTree& tree, int threads, Visit&& visit) {
+void for_each_batch(const KdTree& tree, int threads, ProgressSteps* progress, Visit&& visit) {
   const auto batches = query_batches(tree);
   const auto n = static_cast<std::int64_t>(batches.size());
+  LoopProgress done(progress, tree.size());
 #pragma omp parallel num_threads(thread_count(threads))
   {
     Scratch scratch;
 #pragma omp for schedule(dynamic, kBatchesPerChunk)
-    for (std::int64_t b = 0; b < n; ++b) visit(batches[std::size_t(b)], scratch);
+    for (std::int64_t b = 0; b < n; ++b) {
+      const auto& batch = batches[std::size_t(b)];
+      visit(batch, scratch);
+      done.add(batch[1] - batch[0]);
+    }
   }
+  done.finish();
 }
 
 PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& radii,
                  const Lab2000hlTable& table) {
   PointData out(c.iterated_tree.size(), params.diagnostics);
-  for_each_batch<Stage1Scratch>(c.iterated_tree, params.threads,
+  for_each_batch<Stage1Scratch>(c.iterated_tree, params.threads, params.progress,
                                 [&](const auto& batch, auto& scratch) {
                                   stage1_batch(batch, c, params, radii, table, scratch, out);
                                 });
@@ -403,7 +409,7 @@ LargeArray<FeatureVector> stage2(const KdTree& iterated_tree, const PointData& d
                                  std::vector<std::uint32_t>* counts) {
   LargeArray<FeatureVector> features(iterated_tree.size());  // each written by stage 2
   for_each_batch<Stage2Scratch>(
-      iterated_tree, params.threads, [&](const auto& batch, auto& scratch) {
+      iterated_tree, params.threads, params.progress, [&](const auto& batch, auto& scratch) {
         stage2_batch(batch, iterated_tree, d, radii, scratch, features, counts);
       });
   return features;

@@ -225,6 +225,7 @@ struct PassSettings {
   bool average_normals = true;
   bool keep_points = false;
   double tie_threshold = kPcErrorTieThreshold;  // D: similarPointThreshold
+  LoopProgress* progress = nullptr;             // counts the points done (may be null)
 };
 
 struct PassSums {
@@ -345,7 +346,9 @@ PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tr
       if (p.keep_points) out.per_point[i] = e;
     }
     partial[c] = s;
+    if (p.progress) p.progress->add(last - first);
   }
+  if (p.progress) p.progress->finish();
   for (const PassSums& s : partial) out.sums.add(s);  // in chunk order: any thread count
   return out;
 }
@@ -645,6 +648,9 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
   p.average_normals = options.average_normals;
   p.keep_points = options.per_element;
   p.tie_threshold = conventions.tie_threshold;
+  LoopProgress errors_done(&progress, (direction != Direction::kDistToRef ? a.size() : 0) +
+                                          (direction != Direction::kRefToDist ? b.size() : 0));
+  p.progress = &errors_done;
   std::optional<NamedValues> ab, ba;
   if (direction != Direction::kDistToRef) {
     const PassOutput o = run_pass(a, b, b_tree, d2 ? &b_d2_normals : nullptr, p, options.threads);

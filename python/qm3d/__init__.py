@@ -28,6 +28,7 @@ import atexit as _atexit
 import json as _json
 import math as _math
 import os as _os
+import warnings as _warnings
 
 import numpy as _np
 
@@ -47,9 +48,16 @@ FormatError = _qm3d.FormatError
 NumericError = _qm3d.NumericError
 """Well-formed input the metric cannot score, e.g. a zero-size bounding box (a ValueError)."""
 
+
+class Qm3dWarning(UserWarning):
+    """A metric's warning (a repair made to an input, a caveat on the score): each line of
+    ``Result.warnings`` is also raised through the ``warnings`` module with this category, so
+    ``warnings.simplefilter("error", qm3d.Qm3dWarning)`` or ``pytest.warns`` see it. The
+    details a line leaves out are in ``Result.to_dict()["warning_details"]``."""
+
 __all__ = ["cmdm", "msdm2", "pcqm", "pcqm_sampled", "compare", "metric", "metrics", "sample", "render", "image_quality",
            "read_mesh", "read_cloud", "evaluate", "load_model", "Result", "Direction",
-           "InputError", "FormatError", "NumericError"]
+           "InputError", "FormatError", "NumericError", "Qm3dWarning"]
 
 
 # ---- inputs --------------------------------------------------------------------------------
@@ -193,7 +201,8 @@ class Result:
         details: dict of the metric's further values (psnr: peak, peak_source, nn_min /
             nn_max, points_reference, points_distorted, duplicates_reference,
             duplicates_distorted, normals), as in the JSON.
-        warnings: list of str (repairs made to the inputs, caveats), as the tool prints them.
+        warnings: list of str (repairs made to the inputs, caveats), as the tool prints them;
+            each is also raised as a Qm3dWarning (warnings module) when the metric returns.
         seconds: wall time of the computation.
     """
 
@@ -363,7 +372,11 @@ def _run(name, reference, distorted, kwargs, ref_inputs=None, dist_inputs=None, 
                        _os.fsdecode(run["data_dir"]) if run["data_dir"] is not None
                        else (_DEFAULT_TABLES or ""),
                        weights, model_path, run["progress"], release)
-    return Result(result)
+    out = Result(result)
+    for line in out.warnings:
+        # stacklevel 3: the caller of qm3d.<metric>() or metric().
+        _warnings.warn(line, Qm3dWarning, stacklevel=3)
+    return out
 
 
 def metric(name, reference, distorted, **options):

@@ -213,7 +213,10 @@ TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
   const MetricResult with = compute_cmdm(r, d, o);
   expect_sound_progress(calls, "ref→dist: neighbourhoods, scales 1-3");
   // connectivity, matching, 2 x (the curvatures and the neighbourhoods of all scales), done
-  EXPECT_EQ(calls.size(), 2u + 2 * 2 + 1);
+  EXPECT_EQ(recorder.stage_starts().size(), 2u + 2 * 2 + 1);
+  // Issue 44 item 6: the walks report from inside their loop (every hundredth of the vertices).
+  EXPECT_GE(recorder.within("ref→dist: neighbourhoods, scales 1-3").size(), 20u);
+  EXPECT_GE(recorder.within("ref→dist: curvature, scales 1-3").size(), 20u);
   EXPECT_EQ(with.score, compute_cmdm(r, d).score);
   recorder.calls.clear();
   o.direction = Direction::kDistToRef;
@@ -235,7 +238,7 @@ TEST(Cmdm, MoreScalesThanOneWalkServesComeInChunks) {
   o.progress = recorder.callback();
   const MetricResult ten = compute_cmdm(r, d, o);
   std::vector<std::string> stages;
-  for (const auto& call : recorder.calls) stages.push_back(call.first);
+  for (const auto& call : recorder.stage_starts()) stages.push_back(call.first);
   EXPECT_EQ(stages, (std::vector<std::string>{"connectivity", "dist→ref: closest points",
                                               "dist→ref: curvature, scales 1-8 of 10",
                                               "dist→ref: neighbourhoods, scales 1-8 of 10",

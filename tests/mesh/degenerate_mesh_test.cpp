@@ -110,6 +110,20 @@ ColoredMesh scaled(ColoredMesh m, double factor) {
   return m;
 }
 
+bool warns(const MetricResult& r, const std::string& text) {
+  return std::any_of(r.warnings.begin(), r.warnings.end(),
+                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
+
+// `m` with its positions rounded to a grid of `step` (a quantiser: vertices merge onto one
+// position, their faces keep distinct indices).
+ColoredMesh quantised(ColoredMesh m, double step) {
+  for (auto& p : m.positions) {
+    for (double& x : p) x = std::round(x / step) * step;
+  }
+  return m;
+}
+
 bool warns_of_short_edges(const MetricResult& r) {
   for (const auto& w : r.warnings) {
     if (w.find("edges are shorter than 1.5e-8") != std::string::npos) return true;
@@ -129,9 +143,28 @@ TEST(DegenerateMesh, MeshesSmallEnoughForMeppsAbsoluteEpsilonAreWarnedAbout) {
   EXPECT_FALSE(warns_of_short_edges(compute_cmdm(scaled(ref, 1e-3), scaled(dist, 1e-3), o)));
   const MetricResult tiny = compute_cmdm(scaled(ref, 1e-8), scaled(dist, 1e-8), o);
   EXPECT_TRUE(warns_of_short_edges(tiny));
+  EXPECT_TRUE(warns(tiny, "scale both meshes up")) << ::testing::PrintToString(tiny.warnings);
+  EXPECT_FALSE(warns(tiny, "zero length"));
   Msdm2Options m;
   m.scales = 1;
   EXPECT_TRUE(warns_of_short_edges(compute_msdm2(scaled(ref, 1e-8), scaled(dist, 1e-8), m)));
+}
+
+// Issue 44 item 9: a quantised mesh of box ~2 has zero-length edges from merged vertices;
+// scaling does not remove them, and the warning says what they are instead.
+TEST(DegenerateMesh, ZeroLengthEdgesOfAQuantisedMeshAreNotBlamedOnItsScale) {
+  const auto data = test::source_dir() / "data" / "meshes";
+  const ColoredMesh ref = read_mesh(data / "blob3_ref.off").mesh;
+  const double box = bounding_box(ref.positions).longest_side();
+  ASSERT_GT(box, 0.5);
+  const ColoredMesh coarse = quantised(ref, box / 12);  // coarser than the vertex spacing
+  CmdmOptions o;
+  o.scales = 1;
+  const MetricResult r = compute_cmdm(ref, coarse, o);
+  EXPECT_TRUE(warns(r, "zero length")) << ::testing::PrintToString(r.warnings);
+  EXPECT_TRUE(warns(r, "merged by quantisation"));
+  EXPECT_FALSE(warns(r, "scale both meshes up"));
+  for (const std::string& w : r.warnings) EXPECT_LE(w.size(), 160u) << w;
 }
 
 }  // namespace

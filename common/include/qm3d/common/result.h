@@ -105,6 +105,13 @@ struct Provenance {
   double seconds = 0;      ///< wall time of the computation (reading included when read here)
 };
 
+/// What a warning line (MetricResult::warnings) leaves out: written in the JSON's
+/// `warning_details` (warning.h builds both).
+struct WarningDetails {
+  std::string warning;  ///< the line, as in MetricResult::warnings
+  std::string details;  ///< the rest: full file names, the rule, the numbers
+};
+
 /// The result of one metric on one pair.
 struct MetricResult {
   std::string metric;  ///< "cmdm", "msdm2", "pcqm", ...
@@ -114,7 +121,11 @@ struct MetricResult {
   /// Names of the eight feature entries ("f1".."f8" for the mesh metrics, "F1".."F8" for PCQM,
   /// each paper's notation).
   std::vector<std::string> feature_names;
-  std::vector<std::string> warnings;  ///< repairs and caveats (also printed by the tool)
+  /// Repairs and caveats, each one line of at most kMaxWarningLine characters naming the cause
+  /// and the remedy (warning.h; also printed by the tool).
+  std::vector<std::string> warnings;
+  /// The details of the warnings that have more to say (the JSON's `warning_details`).
+  std::vector<WarningDetails> warning_details;
   Provenance provenance;
   /// The named values of the result as a whole (psnr: pc_error's symmetric "Final" values, or
   /// the one direction's); written as the JSON's top-level `features`. Empty for f1..f8 metrics.

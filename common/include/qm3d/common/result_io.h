@@ -4,7 +4,8 @@
 // JSON (one metric): {metric, version, reference, distorted, options, score, seconds,
 //   directions: {dist_to_ref|ref_to_dist: {score, features: {f1..f8 | F1..F8}, box_size,
 //   bbox_max_side}}, [features, box_size, bbox_max_side: the single direction's, when one was
-//   computed], warnings}. A metric with named values (psnr) has them as each direction's
+//   computed], warnings, warning_details: [{warning, details}] (what a warning line leaves out,
+//   warning.h)}. A metric with named values (psnr) has them as each direction's
 //   `features` and its result's as the top-level `features`, no box size, and its `details`
 //   entries at the top level. NaN and +-inf are written as null; doubles round-trip exactly.
 // CSV: csv_header() columns, one row per result (bbox_max_side columns hold box_size).
