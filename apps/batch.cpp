@@ -31,38 +31,59 @@
 namespace qm3d::app {
 namespace {
 
+// A batch's progress: rows (one per pair and metric) and pairs (done when each of its rows is),
+// counted apart when a pair has several rows ("12/60 rows, 4/20 pairs").
 class Progress {
  public:
-  Progress(std::size_t total, bool quiet)
-      : total_(total), quiet_(quiet), tty_(stderr_is_terminal()),
-        start_(std::chrono::steady_clock::now()), last_(start_) {}
+  Progress(const std::vector<std::pair<ListPair, std::string>>& todo, bool quiet)
+      : total_(std::max<std::size_t>(todo.size(), 1)), quiet_(quiet), tty_(stderr_is_terminal()),
+        start_(std::chrono::steady_clock::now()), last_(start_) {
+    for (const auto& [pair, metric] : todo) ++rows_left_[{pair.reference, pair.distorted}];
+    pairs_total_ = rows_left_.size();
+  }
 
-  void done_one(bool failed) {
+  void done_one(const std::string& row, bool failed) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++done_;
     failed_ += failed ? 1 : 0;
+    const auto f = csv_split(row);
+    if (f.size() > 1) {
+      const auto it = rows_left_.find({f[0], f[1]});
+      if (it != rows_left_.end() && it->second > 0 && --it->second == 0) ++pairs_done_;
+    }
     if (quiet_) return;
-    const auto now = std::chrono::steady_clock::now();
+    print(std::chrono::steady_clock::now());
+  }
+  std::size_t failed() const { return failed_; }
+
+ private:
+  // "7/7 pairs" when every pair has one row, else "12/60 rows, 4/20 pairs".
+  std::string counts() const {
+    const std::string pairs =
+        std::to_string(pairs_done_) + "/" + std::to_string(pairs_total_) + " pairs";
+    if (pairs_total_ == total_) return pairs;
+    return std::to_string(done_) + "/" + std::to_string(total_) + " rows, " + pairs;
+  }
+
+  void print(std::chrono::steady_clock::time_point now) {
     const double elapsed = std::chrono::duration<double>(now - start_).count();
     const double eta = elapsed / done_ * (total_ - done_);
     if (tty_) {
       const int width = 30;
       const int filled = static_cast<int>(width * done_ / total_);
       std::cerr << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
-                << done_ << "/" << total_ << " (" << failed_ << " failed)  ETA "
-                << format_duration(eta) << "   " << std::flush;
+                << counts() << " (" << failed_ << " failed)  ETA " << format_duration(eta)
+                << "   " << std::flush;
       if (done_ == total_) std::cerr << "\n";
     } else if (done_ == total_ || now - last_ > std::chrono::seconds(10)) {
-      std::cerr << "batch: " << done_ << "/" << total_ << " pairs done (" << failed_
-                << " failed), elapsed " << format_duration(elapsed) << ", ETA "
-                << format_duration(eta) << "\n";
+      std::cerr << "batch: " << counts() << " done (" << failed_ << " failed), elapsed "
+                << format_duration(elapsed) << ", ETA " << format_duration(eta) << "\n";
       last_ = now;
     }
   }
-  std::size_t failed() const { return failed_; }
 
- private:
-  std::size_t total_, done_ = 0, failed_ = 0;
+  std::size_t total_, done_ = 0, failed_ = 0, pairs_total_ = 0, pairs_done_ = 0;
+  std::map<std::pair<std::string, std::string>, std::size_t> rows_left_;
   bool quiet_, tty_;
   std::chrono::steady_clock::time_point start_, last_;
   std::mutex mutex_;
@@ -412,7 +433,7 @@ ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<Lis
   // A worker process writes its pair's report itself; here only the folder is made.
   PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
   const std::vector<PairJob> jobs = group_jobs(todo, !o.report_dir.empty());
-  Progress progress(std::max<std::size_t>(todo.size(), 1), o.quiet || todo.empty());
+  Progress progress(todo, o.quiet || todo.empty());
   const int concurrent = std::max(1, std::min<int>(o.jobs, static_cast<int>(jobs.size())));
   const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
   // Each job gets its share of the threads, passed to every metric explicitly (a metric's own
@@ -432,7 +453,7 @@ ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<Lis
       next = jobs.size();  // no job starts after a failed write
       return;
     }
-    progress.done_one(failed);
+    progress.done_one(row, failed);
   };
   std::atomic<bool> workers_ok{true};
   auto worker = [&] {

@@ -366,18 +366,16 @@ void add_plan_warnings(const FacePlan& plan, std::size_t faces, GridSamples& out
   if (plan.zero_normal > 0) {
     out.warnings.push_back(
         std::to_string(plan.zero_normal) + " of " + std::to_string(faces) +
-        " faces are so large (edges above about 1e9) that their squared normal overflows "
-        "float32: as in mmetric, their normal is zero, their rays go along x only and D2 on them "
-        "is 0, so the values differ from those of a scaled-down copy; scale the meshes down "
-        "(e.g. to metres) for unit-independent values");
+        // As in mmetric: a zero normal, rays along x only, D2 0 on those faces (docs/formats.md).
+        " faces: squared normal overflows float32 (edges > 1e9), zero as in mmetric; scale the "
+        "meshes down");
   }
   if (plan.below_epsilon > 0) {
     out.warnings.push_back(
         std::to_string(plan.below_epsilon) + " of " + std::to_string(faces) +
-        " faces are smaller than mmetric's absolute ray-triangle epsilon (twice their projected "
-        "area below 1e-6 in the file's units) and get no samples, as in mmetric: its grid "
-        "sampling depends on the unit; scale the meshes up (e.g. to millimetres) to sample "
-        "every face");
+        // Twice their projected area below 1e-6 in the file's units: unit-dependent, as mmetric.
+        " faces below mmetric's absolute ray-triangle epsilon (1e-6) get no samples; scale the "
+        "meshes up");
   }
 }
 

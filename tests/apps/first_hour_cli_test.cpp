@@ -195,5 +195,30 @@ TEST_F(FirstHour, BatchWarningsColumnHasTheCountAndFirstMessage) {
   EXPECT_EQ(csv_split(rows.at(1))[static_cast<std::size_t>(column)], expected);
 }
 
+
+// Batch progress counts rows (a pair and a metric) and pairs apart: 2 pairs of 2 rows each end
+// on "4/4 rows, 2/2 pairs"; a list of one row per pair says pairs only.
+TEST_F(FirstHour, BatchProgressCountsRowsAndPairsApart) {
+  const std::string ref =
+      (fs::path(QM3D_SOURCE_DIR) / "data" / "clouds" / "sphere_2k_ref.ply").string();
+  const std::string d1 =
+      (fs::path(QM3D_SOURCE_DIR) / "data" / "clouds" / "sphere_2k_gnoise0.005.ply").string();
+  const std::string d2 =
+      (fs::path(QM3D_SOURCE_DIR) / "data" / "clouds" / "sphere_2k_cnoise10.ply").string();
+  const fs::path list = dir_ / "list.csv", out = dir_ / "results.csv";
+  std::ofstream(list) << "reference,distorted,metric\n"
+                      << ref << "," << d1 << ",psnr\n" << ref << "," << d1 << ",dlab\n"
+                      << ref << "," << d2 << ",psnr\n" << ref << "," << d2 << ",dlab\n";
+  const CliRun two = qm3d("batch " + list.string() + " -o " + out.string());
+  ASSERT_EQ(two.code, 0) << two.err;
+  EXPECT_NE(two.err.find("batch: 4/4 rows, 2/2 pairs done (0 failed)"), std::string::npos)
+      << two.err;
+  std::ofstream(list) << "reference,distorted,metric\n"
+                      << ref << "," << d1 << ",psnr\n" << ref << "," << d2 << ",psnr\n";
+  const CliRun one = qm3d("batch " + list.string() + " -o " + out.string() + " --overwrite");
+  ASSERT_EQ(one.code, 0) << one.err;
+  EXPECT_NE(one.err.find("batch: 2/2 pairs done (0 failed)"), std::string::npos) << one.err;
+}
+
 }  // namespace
 }  // namespace qm3d

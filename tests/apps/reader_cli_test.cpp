@@ -64,7 +64,8 @@ TEST_F(ReaderCli, OneFloatColourAboveOneIsAWarningAndColourScaleUnitReadsItAs0To
   const test::CliRun automatic =
       qm3d("pcqm '" + path("ref.ply") + "' '" + path("odd.ply") + "' --csv");
   ASSERT_EQ(automatic.code, 0) << automatic.err;
-  EXPECT_NE(automatic.err.find("qm3d: warning: " + path("odd.ply") +
+  // A line over 160 characters names the file by its name alone (issue 44: one short line).
+  EXPECT_NE(automatic.err.find(std::string("qm3d: warning: odd.ply") +
                                ": 1 of 6000 colour values above 1 (max 1.0000001192092896): "
                                "read as 0..255 like the reference; --colour-scale unit reads "
                                "them as 0..1"),
@@ -101,7 +102,7 @@ TEST_F(ReaderCli, ObjColourScaleOptionAppliesToMeshMetrics) {
   const std::string pair = " '" + path("ref.obj") + "' '" + path("ref.obj") + "'";
   const test::CliRun automatic = qm3d("cmdm" + pair);
   ASSERT_EQ(automatic.code, 0) << automatic.err;
-  EXPECT_NE(automatic.err.find(path("ref.obj") + ": 1 of 1926 colour values above 1"),
+  EXPECT_NE(automatic.err.find("ref.obj: 1 of 1926 colour values above 1"),  // name alone: a short line
             std::string::npos)
       << automatic.err;
   const test::CliRun byte = qm3d("cmdm --colour-scale byte" + pair);
@@ -120,7 +121,7 @@ TEST_F(ReaderCli, Float32CoordinatesFarFromTheOriginAreAWarning) {
   }
   ply::write(dir_ / "far.ply", far);
   const test::CliRun r = qm3d("pcqm '" + path("far.ply") + "' '" + path("far.ply") + "'");
-  EXPECT_NE(r.err.find(path("far.ply") + ": coordinates stored as float32"), std::string::npos)
+  EXPECT_NE(r.err.find("far.ply: coordinates stored as float32"), std::string::npos)  // name alone
       << r.err;
 }
 
