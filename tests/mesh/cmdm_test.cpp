@@ -214,9 +214,11 @@ TEST(Cmdm, ReportsProgressWithoutChangingTheResult) {
   expect_sound_progress(calls, "ref→dist: neighbourhoods, scales 1-3");
   // connectivity, matching, 2 x (the curvatures and the neighbourhoods of all scales), done
   EXPECT_EQ(recorder.stage_starts().size(), 2u + 2 * 2 + 1);
-  // Issue 44 item 6: the walks report from inside their loop (every hundredth of the vertices).
-  EXPECT_GE(recorder.within("ref→dist: neighbourhoods, scales 1-3").size(), 20u);
-  EXPECT_GE(recorder.within("ref→dist: curvature, scales 1-3").size(), 20u);
+  // Issue 44 item 6: the walks report from inside their loop (every hundredth of the vertices
+  // the calling thread sees; on a loaded machine the other threads may take most of the loop,
+  // so only "more than the stage's start" is certain).
+  EXPECT_GE(recorder.within("ref→dist: neighbourhoods, scales 1-3").size(), 2u);
+  EXPECT_GE(recorder.within("ref→dist: curvature, scales 1-3").size(), 2u);
   EXPECT_EQ(with.score, compute_cmdm(r, d).score);
   recorder.calls.clear();
   o.direction = Direction::kDistToRef;

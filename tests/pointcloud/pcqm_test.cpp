@@ -401,8 +401,11 @@ TEST(Pcqm, LongStagesReportFromInsideTheirLoops) {
   EXPECT_FALSE(other_thread);
   for (const char* stage : {"ref→dist: curvatures and correspondences", "ref→dist: features"}) {
     const std::vector<double> inside = recorder.within(stage);
-    EXPECT_GE(inside.size(), 10u) << stage;  // ~100: the hundredths the calling thread sees
-    EXPECT_LE(inside.size(), 400u) << stage;
+    // ~100 (the hundredths the calling thread sees); on a loaded machine the other thread may
+    // take most of the loop, so only "more than the stage's start" is certain. Never one call
+    // per point (25000).
+    EXPECT_GE(inside.size(), 2u) << stage;
+    EXPECT_LE(inside.size(), 2000u) << stage;
   }
   const auto& calls = recorder.calls;
   for (std::size_t i = 1; i < calls.size(); ++i) {
