@@ -677,6 +677,17 @@ void check_peak(const std::optional<double>& peak) {
   }
 }
 
+// The provenance and details every psnr result ends with, the progress line closed.
+MetricResult finished(MetricResult result, nlohmann::json details, const char* tool,
+                      std::chrono::steady_clock::time_point start, ProgressSteps& progress) {
+  result.details = std::move(details);
+  result.provenance.reproduces = tool;
+  result.provenance.version = kVersion;
+  result.provenance.seconds = seconds_since(start);
+  progress.finish();
+  return result;
+}
+
 }  // namespace
 
 MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals& reference_normals,
@@ -752,12 +763,7 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   details["peak_source"] =
       options.peak ? "given" : "largest nearest-neighbour distance in the reference";
   compare_loaded(a, b, na, peak, options, Conventions{}, reference_name, progress, details, result);
-  result.details = std::move(details);
-  result.provenance.reproduces = kPcErrorTool;
-  result.provenance.version = kVersion;
-  result.provenance.seconds = seconds_since(start);
-  progress.finish();
-  return result;
+  return finished(std::move(result), std::move(details), kPcErrorTool, start, progress);
 }
 
 namespace {
@@ -894,12 +900,7 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   c.tie_threshold = kMmetricTieThreshold;
   c.d2_normals = options.d2_normals;
   compare_loaded(a, b, a, peak, o, c, reference.name(), progress, details, result);
-  result.details = std::move(details);
-  result.provenance.reproduces = kMmetricTool;
-  result.provenance.version = kVersion;
-  result.provenance.seconds = seconds_since(start);
-  progress.finish();
-  return result;
+  return finished(std::move(result), std::move(details), kMmetricTool, start, progress);
 }
 
 // mmetric 1.1.7's compare --mode pcc on two clouds (mmCompare.cpp Compare::pcc; the rules in
@@ -960,12 +961,7 @@ MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
   c.tie_threshold = kMmetricTieThreshold;
   c.d2_normals = d2_normals;
   compare_loaded(a, b, a, peak, options, c, reference_name, progress, details, result);
-  result.details = std::move(details);
-  result.provenance.reproduces = kMmetricTool;
-  result.provenance.version = kVersion;
-  result.provenance.seconds = seconds_since(start);
-  progress.finish();
-  return result;
+  return finished(std::move(result), std::move(details), kMmetricTool, start, progress);
 }
 
 // ---- the registry entry -------------------------------------------------------------------------
