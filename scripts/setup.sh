@@ -22,7 +22,6 @@ PACKAGES=(
   python3 python3-numpy time
   pybind11-dev python3-dev python3-pytest python3-pandas python3-open3d python3-distributed
   python3-pip python3-venv python3-setuptools python3-wheel python3-yaml
-  gnuplot-nox
   locales
   slurm-wlm munge
   chromium libjs-three
