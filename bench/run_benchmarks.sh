@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|geodesicpsim|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|geodesicpsim|krasula|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -50,6 +50,12 @@
 #            the reference's recorded numbers (geodesicpsim_reference.csv: its CPU time and peak
 #            RSS with one thread); the score must equal the table's within 1e-9 relative. Targets:
 #            the reference's CPU / qm3d's >= 5, qm3d's peak RSS <= 1/4 of the reference's
+#            (reported, not enforced).
+#   krasula  `eval --sd-column/--n-column` (Krasula's AUC_DS / AUC_BW / C0 with DeLong's
+#            covariances) on 10,000 synthetic stimuli (49,995,000 J.149 pairs;
+#            bench/evaluation/gen_krasula_stimuli.py) with one metric and with two (the second adds
+#            the pass over the pairs for the covariance between metrics); the Krasula values must
+#            be the same on every run. Targets: seconds, peak RSS well under 1 GB with one metric
 #            (reported, not enforced).
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
@@ -685,6 +691,29 @@ if [ "$WHICH" = all ] || [ "$WHICH" = graphsim ]; then
     fi
     printf '| %s | 2 | %s s | %s s | %s MB | %s | %s | %s |\n' "$label" "$(stats "$TMP/gt" 0)" \
       "$(stats "$TMP/gt" 1)" "$(stats "$TMP/gt" 2 1024)" "$s" "$expected" "$target"
+  done
+fi
+if [ "$WHICH" = all ] || [ "$WHICH" = krasula ]; then
+  KS="$DATA/krasula_10000.csv"
+  [ -f "$KS" ] || $PY "$ROOT/bench/evaluation/gen_krasula_stimuli.py" 10000 "$KS" >&2
+  echo
+  echo "| case | threads | wall | CPU | peak RSS | AUC_BW of m1 | target |"
+  echo "|---|---|---|---|---|---|---|"
+  for cols in m1 m1,m2; do
+    : > "$TMP/kt"
+    : > "$TMP/ks"
+    for _ in $(seq "$RUNS"); do
+      measure_once "$TMP/kt" "$QM3D" --threads "$THREADS" --quiet eval "$KS" "$KS" \
+        --scores-key stimulus --scores-column "$cols" --mos-column MOS --sd-column SD \
+        --n-column n --bootstrap 0 --json
+      $PY -c "import json,sys; j=json.load(open(sys.argv[1])); print(repr([j['metrics'][m]['krasula'] for m in sorted(j['metrics'])] + [c for c in j['comparisons'] if c['test'].startswith(('delong', 'c0'))]))" "$TMP/out" >> "$TMP/ks" 2>/dev/null || echo error >> "$TMP/ks"
+    done
+    if [ "$(sort -u "$TMP/ks" | wc -l)" != 1 ] || [ "$(head -1 "$TMP/ks")" = error ]; then
+      echo "FAIL: Krasula $cols: the values differ between runs or are missing" >&2; STATUS=1
+    fi
+    auc=$($PY -c "import json,sys; print(json.load(open(sys.argv[1]))['metrics']['m1']['krasula']['auc_bw'])" "$TMP/out" 2>/dev/null || echo n/a)
+    printf '| Krasula 10,000 stimuli (50 M pairs), metrics %s | %s | %s s | %s s | %s MB | %s | seconds, < 1 GB |\n' \
+      "$cols" "$THREADS" "$(stats "$TMP/kt" 0)" "$(stats "$TMP/kt" 1)" "$(stats "$TMP/kt" 2 1024)" "$auc"
   done
 fi
 exit $STATUS

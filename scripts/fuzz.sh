@@ -12,7 +12,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 SECONDS_PER_TARGET="${1:-60}"
 BUILD="$ROOT/build-fuzz"
 JOBS="${QM3D_JOBS:-$(nproc)}"
-TARGETS=(fuzz_ply fuzz_mesh fuzz_pcd fuzz_metrics fuzz_grid)
+TARGETS=(fuzz_ply fuzz_mesh fuzz_pcd fuzz_metrics fuzz_grid fuzz_views)
 
 CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DQM3D_BUILD_FUZZERS=ON -DQM3D_BUILD_TESTS=OFF -DQM3D_BUILD_BENCH=OFF >/dev/null

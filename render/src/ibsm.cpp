@@ -396,6 +396,13 @@ IbsmOptions ibsm_options(const OptionValues& v, const RunOptions& run) {
 }
 
 std::vector<std::uint8_t> png_bytes(const View& v) {
+  // PNG has no empty image (width and height >= 1): stb would write one no reader opens.
+  if (v.width < 1 || v.height < 1 ||
+      v.rgba.size() != static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height) * 4) {
+    throw std::invalid_argument("png_bytes: a view of " + std::to_string(v.width) + "x" +
+                                std::to_string(v.height) + " pixels with " +
+                                std::to_string(v.rgba.size()) + " RGBA bytes");
+  }
   std::vector<std::uint8_t> out;
   const auto append = [](void* context, void* data, int size) {
     auto* bytes = static_cast<std::vector<std::uint8_t>*>(context);

@@ -137,13 +137,15 @@ struct KrasulaResult {
 /// higher = better) against `labels[p]`.
 /// With fewer than 2 similar pairs the DS values (AUC_DS, its SE and tests, THR) are NaN.
 /// Cost: the pairs are never listed per metric as Mann-Whitney / DeLong would; each metric's
-/// |d| and B values are sorted once (8 bytes a pair), and each pair's structural components
-/// (the share of the other class below it, ties counting half) are counted in them, blocks of
-/// pairs sorted by |d| sweeping the sorted arrays: O(P log P) time, 8 bytes a pair and metric
-/// (50 M pairs: 400 MB a metric). Every value is the one the pair lists give, bit for bit (the
-/// counts are exact integers, the sums run in the pair lists' order).
+/// |d| and B values are sorted once (8 bytes a pair and metric: 50 M pairs, 400 MB a metric).
+/// A pair's structural component (the share of the other class below it, ties counting half)
+/// is an integer count over twice the class size, so the AUCs and DeLong's covariances are exact
+/// integer sums: a metric's own values are summed over the distinct values of its sorted arrays
+/// (O(P log P) for the sort, linear after it); the covariances between metrics need each pair's
+/// counts under both, found for blocks of pairs sorted by |d| sweeping the sorted arrays (with 2
+/// metrics or more only). Exact sums: the same bits for any number of threads.
 /// @throws std::invalid_argument  lengths differ, a non-finite difference, a label other than
-///                                -1, 0, 1, or fewer than 2 different pairs
+///                                -1, 0, 1, fewer than 2 different pairs or 2^31 pairs or more
 KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differences,
                                const std::vector<int>& labels);
 

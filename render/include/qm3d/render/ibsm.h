@@ -80,6 +80,8 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
 RenderModel model_of(const Input& input, const SplatOptions& splats = {});
 
 /// A view as a PNG file's bytes (RGBA, 8 bits, top row first, alpha 0 where nothing is drawn).
+/// @throws std::invalid_argument  an empty view (PNG has none) or one whose RGBA bytes are not
+///                                4 a pixel
 std::vector<std::uint8_t> png_bytes(const View& view);
 
 /// The view pairs of an ibsm result (its cameras, frame, culling, lighting and splat sizes, from
