@@ -212,8 +212,6 @@ std::size_t MpegTree::knn(const Point3f& query, std::size_t k, std::uint32_t* in
   return set.size();
 }
 
-const std::vector<std::uint32_t>& MpegTree::leaf_order() const { return impl_->tree.vAcc; }
-
 std::size_t MpegTree::expanding_knn(const Point3f& query, std::size_t first, bool expand,
                                     std::uint32_t* indices, double* distances2) const {
   std::size_t k = first;

@@ -106,10 +106,6 @@ class MpegTree {
   std::size_t expanding_knn(const Point3f& query, std::size_t first, bool expand,
                             std::uint32_t* indices, double* distances2) const;
 
-  /// The points in the tree's leaf order (nanoflann's vAcc): neighbours in space are close in
-  /// it, so queries made in this order find the tree's nodes and points in the cache.
-  const std::vector<std::uint32_t>& leaf_order() const;
-
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
