@@ -332,7 +332,7 @@ EOF
     ratio() { $PY -c "print('%.2f' % ($1 / max($2, 0.01)))"; }
     met() { $PY -c "import sys; print('met' if $1 else 'missed')"; }
     wall_ratio=$(ratio "$wq" "$wp") cpu_ratio=$(ratio "$cq" "$cp") rss_ratio=$(ratio "$mq" "$mp")
-    ratios+=("| $label | $wq / $wp s = **$wall_ratio** ($(met "$wall_ratio <= 1/3")) | $cq / $cp s = $cpu_ratio | $((${mq%.*} / 1024)) / $((${mp%.*} / 1024)) MB = **$rss_ratio** ($(met "$rss_ratio <= 1.5")) |")
+    ratios+=("| $label | $wq / $wp s = **$wall_ratio** ($(met "$wall_ratio <= 1/3")) | $cq / $cp s = $cpu_ratio | $(((${mq%.*} + 512) / 1024)) / $(((${mp%.*} + 512) / 1024)) MB = **$rss_ratio** ($(met "$rss_ratio <= 1.5")) |")
     if same_psnr "$d1" "$pd1" && [ "$(sort -u "$TMP/dp" | wc -l)" = 1 ]; then
       summary+=("ok: $label: D1 PSNR qm3d $d1 = pc_error $pd1")
     else
