@@ -1198,6 +1198,109 @@ std::optional<std::pair<detail::FloatCloudFile, detail::FloatCloudFile>> read_ow
   return std::pair{std::move(*a), std::move(*b)};
 }
 
+/// The options of a run (--peak, --color-space, ...) as compute_psnr / compute_mesh_psnr take
+/// them.
+MeshPsnrOptions psnr_options(const RunOptions& run, const OptionValues& v) {
+  MeshPsnrOptions o;
+  static_cast<RunOptions&>(o) = run;
+  const double peak = v.at("peak").get<double>();
+  if (peak > 0) o.peak = peak;
+  o.colour_space = parse_colour_space(v.at("color_space").get<std::string>());
+  o.duplicates = static_cast<DuplicatePoints>(v.at("drop_duplicates").get<int>());
+  o.tied = static_cast<TiedNeighbours>(v.at("neighbours").get<int>());
+  o.average_normals = v.at("average_normals").get<bool>();
+  o.hausdorff = !v.at("no_hausdorff").get<bool>();
+  o.colour = !v.at("no_color").get<bool>();
+  o.estimate_normals = v.at("normals").get<std::string>() == "estimate";
+  return o;
+}
+
+/// Two PLY clouds of the common layout compared by pc_error's rules, read by psnr's own reader
+/// straight to float32 (psnr_reader.h); nullopt when it does not apply (read_inputs then).
+std::optional<MetricResult> run_on_own_reads(const Input& ref, const Input& dist,
+                                             const PsnrOptions& o, const OptionValues& v) {
+  const std::string normals = v.at("normals").get<std::string>();
+  if (ref.is_mesh() || dist.is_mesh() || v.at("conventions").get<std::string>() == "mmetric" ||
+      v.at("d2_normals").get<std::string>() == "own") {
+    return std::nullopt;
+  }
+  auto files = read_own(ref, dist, o.threads);
+  if (!files) return std::nullopt;
+  const std::vector<std::string> reading =
+      merged_lines(files->first.warnings, files->second.warnings);
+  const ReferenceNormals given =
+      normals.empty() || o.estimate_normals ? ReferenceNormals{} : normals_file(normals);
+  const bool own = !files->first.cloud.normals.empty();
+  MetricResult r = psnr_of_files(std::move(files->first), given, std::move(files->second), o,
+                                 ref.name(), dist.name());
+  r.details["normals"] = o.estimate_normals ? "estimated"
+                         : !normals.empty() ? normals
+                         : own              ? "reference file"
+                                            : "none";
+  r.warnings.insert(r.warnings.begin(), reading.begin(), reading.end());
+  return r;
+}
+
+/// psnr on inputs read as run_metric reads them: two meshes (mmetric's grid), two clouds by
+/// mmetric's conventions, or two clouds by pc_error's.
+MetricResult run_on_inputs(const GridSampler& grid_sampler, const Input& ref, const Input& dist,
+                           MeshPsnrOptions o, const OptionValues& v) {
+  const std::string normals = v.at("normals").get<std::string>();
+  const std::string d2_normals = v.at("d2_normals").get<std::string>();
+  const std::string conventions = v.at("conventions").get<std::string>();
+  if (ref.is_mesh() != dist.is_mesh()) {
+    const Input& mesh = ref.is_mesh() ? ref : dist;
+    throw FormatError("psnr: " + mesh.name() +
+                      " is a mesh and the other input a cloud; psnr "
+                      "compares two meshes (sampled on one grid) or two clouds: sample the "
+                      "mesh first (qm3d sample --mode grid)");
+  }
+  if (ref.is_mesh() && dist.is_mesh()) {
+    if (conventions == "pc_error") {
+      throw std::invalid_argument(
+          "conventions: two meshes are sampled and compared as mmetric "
+          "does; pc_error applies to clouds");
+    }
+    if (!normals.empty()) {
+      throw std::invalid_argument(
+          "normals: two meshes are compared on their samples' face "
+          "normals; --normals applies to clouds");
+    }
+    o.grid_size = v.at("grid_size").get<int>();
+    o.d2_normals = d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn;
+    o.bilinear = v.at("bilinear").get<bool>();
+    return compute_mesh_psnr(ref, dist, grid_sampler, o);
+  }
+  if (conventions == "mmetric") {
+    if (!normals.empty()) {
+      throw std::invalid_argument(
+          "normals: with conventions mmetric each cloud's own normals "
+          "are used (as mm compare); --normals applies to pc_error's");
+    }
+    MetricResult r = compute_psnr_mmetric(
+        ref.cloud(), ref.cloud_normals(), dist.cloud(), dist.cloud_normals(), o,
+        d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn, ref.name(),
+        dist.name());
+    r.details["normals"] = ref.cloud_normals().empty() ? "none" : "each file's own";
+    return r;
+  }
+  if (d2_normals == "own") {
+    throw std::invalid_argument(
+        "d2_normals: own applies to two meshes, or to two clouds with "
+        "--conventions mmetric; pc_error transfers the reference's "
+        "normals");
+  }
+  const ReferenceNormals given = normals.empty() || o.estimate_normals
+                                     ? ReferenceNormals{ref.cloud_normals(), {}, {}}
+                                     : normals_file(normals);
+  MetricResult r = compute_psnr(ref.cloud(), given, dist.cloud(), o, ref.name(), dist.name());
+  r.details["normals"] = o.estimate_normals      ? "estimated"
+                         : !normals.empty()      ? normals
+                         : given.normals.empty() ? "none"
+                                                 : "reference file";
+  return r;
+}
+
 }  // namespace
 
 MetricSpec psnr_spec(GridSampler grid_sampler) {
@@ -1300,95 +1403,12 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
   s.reads_files = true;
   s.run = [grid_sampler](const MetricSpec&, const Input& ref, const Input& dist,
                          const RunOptions& run, const OptionValues& v) {
-    MeshPsnrOptions o;
-    static_cast<RunOptions&>(o) = run;
-    const double peak = v.at("peak").get<double>();
-    if (peak > 0) o.peak = peak;
-    o.colour_space = parse_colour_space(v.at("color_space").get<std::string>());
-    o.duplicates = static_cast<DuplicatePoints>(v.at("drop_duplicates").get<int>());
-    o.tied = static_cast<TiedNeighbours>(v.at("neighbours").get<int>());
-    o.average_normals = v.at("average_normals").get<bool>();
-    o.hausdorff = !v.at("no_hausdorff").get<bool>();
-    o.colour = !v.at("no_color").get<bool>();
-    const std::string normals = v.at("normals").get<std::string>();
-    o.estimate_normals = normals == "estimate";
-    const std::string d2_normals = v.at("d2_normals").get<std::string>();
-    const std::string conventions = v.at("conventions").get<std::string>();
+    const MeshPsnrOptions o = psnr_options(run, v);
+    if (std::optional<MetricResult> r = run_on_own_reads(ref, dist, o, v)) return *r;
     const bool two_meshes = ref.is_mesh() && dist.is_mesh();
-    // Two PLY clouds of the common layout compared by pc_error's rules: read by psnr's own
-    // reader, straight to float32 (psnr_reader.h); anything else as run_metric reads inputs.
-    if (!two_meshes && conventions != "mmetric" && d2_normals != "own") {
-      if (auto files = read_own(ref, dist, run.threads)) {
-        const std::vector<std::string> reading =
-            merged_lines(files->first.warnings, files->second.warnings);
-        const ReferenceNormals given =
-            normals.empty() || o.estimate_normals ? ReferenceNormals{} : normals_file(normals);
-        const bool own = !files->first.cloud.normals.empty();
-        MetricResult r = psnr_of_files(std::move(files->first), given, std::move(files->second), o,
-                                       ref.name(), dist.name());
-        r.details["normals"] = o.estimate_normals ? "estimated"
-                               : !normals.empty() ? normals
-                               : own              ? "reference file"
-                                                  : "none";
-        r.warnings.insert(r.warnings.begin(), reading.begin(), reading.end());
-        return r;
-      }
-    }
     const std::vector<std::string> reading =
         read_inputs(ref, dist, two_meshes ? Input::Kind::kMesh : Input::Kind::kCloud, run.threads);
-    MetricResult r = [&] {
-      if (ref.is_mesh() != dist.is_mesh()) {
-        const Input& mesh = ref.is_mesh() ? ref : dist;
-        throw FormatError("psnr: " + mesh.name() +
-                          " is a mesh and the other input a cloud; psnr "
-                          "compares two meshes (sampled on one grid) or two clouds: sample the "
-                          "mesh first (qm3d sample --mode grid)");
-      }
-      if (ref.is_mesh() && dist.is_mesh()) {
-        if (conventions == "pc_error") {
-          throw std::invalid_argument(
-              "conventions: two meshes are sampled and compared as mmetric "
-              "does; pc_error applies to clouds");
-        }
-        if (!normals.empty()) {
-          throw std::invalid_argument(
-              "normals: two meshes are compared on their samples' face "
-              "normals; --normals applies to clouds");
-        }
-        o.grid_size = v.at("grid_size").get<int>();
-        o.d2_normals = d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn;
-        o.bilinear = v.at("bilinear").get<bool>();
-        return compute_mesh_psnr(ref, dist, grid_sampler, o);
-      }
-      if (conventions == "mmetric") {
-        if (!normals.empty()) {
-          throw std::invalid_argument(
-              "normals: with conventions mmetric each cloud's own normals "
-              "are used (as mm compare); --normals applies to pc_error's");
-        }
-        MetricResult r = compute_psnr_mmetric(
-            ref.cloud(), ref.cloud_normals(), dist.cloud(), dist.cloud_normals(), o,
-            d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn, ref.name(),
-            dist.name());
-        r.details["normals"] = ref.cloud_normals().empty() ? "none" : "each file's own";
-        return r;
-      }
-      if (d2_normals == "own") {
-        throw std::invalid_argument(
-            "d2_normals: own applies to two meshes, or to two clouds with "
-            "--conventions mmetric; pc_error transfers the reference's "
-            "normals");
-      }
-      const ReferenceNormals given = normals.empty() || o.estimate_normals
-                                         ? ReferenceNormals{ref.cloud_normals(), {}, {}}
-                                         : normals_file(normals);
-      MetricResult r = compute_psnr(ref.cloud(), given, dist.cloud(), o, ref.name(), dist.name());
-      r.details["normals"] = o.estimate_normals      ? "estimated"
-                             : !normals.empty()      ? normals
-                             : given.normals.empty() ? "none"
-                                                     : "reference file";
-      return r;
-    }();
+    MetricResult r = run_on_inputs(grid_sampler, ref, dist, o, v);
     r.warnings.insert(r.warnings.begin(), reading.begin(), reading.end());
     return r;
   };
