@@ -447,8 +447,8 @@ EOF
     [ -n "$MM" ] || continue
     printf '| %s | mm (sample x 2 + compare) | 1 | %s s | %s s | %s MB | %s | |\n' "$label" \
       "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$(head -1 "$TMP/dm")"
-    wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
-    summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 0.25)")
+    wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0) mq=$(median "$TMP/tq" 2) mm=$(median "$TMP/tm" 2)
+    summary+=("$label: qm3d / mm: wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 0.25), peak RSS $(((${mq%.*} + 512) / 1024)) / $(((${mm%.*} + 512) / 1024)) MB = $($PY -c "print('%.2f' % ($mq / $mm))") (target <= 1)")
   done
   echo
   for line in "${summary[@]}"; do echo "$line"; done
