@@ -1,5 +1,6 @@
 #include "psnr_reader.h"
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -100,7 +101,9 @@ std::optional<Layout> simple_layout(const ply::Header& h) {
   return l;
 }
 
-void decode(const char* record, const Layout& l, std::size_t i, FloatCloud& out) {
+// One vertex record into point i; false when a coordinate is not finite (the general reader
+// refuses the file, naming the vertex).
+bool decode(const char* record, const Layout& l, std::size_t i, FloatCloud& out) {
   for (int c = 0; c < 3; ++c) std::memcpy(&out.positions[i][c], record + l.xyz[c], sizeof(float));
   if (l.rgb[0] >= 0) {
     for (int c = 0; c < 3; ++c) {
@@ -112,6 +115,8 @@ void decode(const char* record, const Layout& l, std::size_t i, FloatCloud& out)
       std::memcpy(&out.normals[i][c], record + l.normal[c], sizeof(float));
     }
   }
+  const Point3f& p = out.positions[i];
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
 }  // namespace
@@ -154,7 +159,9 @@ std::optional<FloatCloudFile> read_float_ply(const std::filesystem::path& path) 
       throw InputError(path.string() + ": read failed (the file changed while read?)");
     }
     for (std::size_t k = 0; k < count; ++k) {
-      decode(block.data() + k * layout->stride, *layout, first + k, out.cloud);
+      if (!decode(block.data() + k * layout->stride, *layout, first + k, out.cloud)) {
+        return std::nullopt;
+      }
     }
   }
   // The general reader's warning for float32 coordinates.

@@ -3,8 +3,9 @@
 // It reads straight into what pc_error holds (float32 positions and normals, 8-bit colours: 15
 // bytes a point instead of the general reader's 48), in blocks, never the whole file at once.
 // Every other file (ASCII, big-endian, double or 16-bit values, other colour names, faces or
-// other elements, a size that does not match the header) is left to the general reader, which
-// gives the same values and explains what is wrong with a bad file.
+// other elements, a size that does not match the header, a coordinate that is not finite) is
+// left to the general reader, which gives the same values and explains what is wrong with a bad
+// file.
 #pragma once
 
 #include <filesystem>

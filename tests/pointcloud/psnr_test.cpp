@@ -243,8 +243,8 @@ TEST(PsnrLoading, CoordinatesAndNormalsBecomeFloat32) {
 }
 
 // psnr's own reader (psnr_reader.h) gives what the general reader gives, rounded as pc_error reads
-// it (the same points, colours, normals and warnings); every other layout is left to the general
-// reader.
+// it (the same points, colours, normals and warnings); every other layout, and a file the general
+// reader refuses (a NaN coordinate), is left to the general reader.
 TEST(PsnrReader, ReadsBinaryCloudsAsTheGeneralReaderAndLeavesOtherLayouts) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / "qm3d_psnr_reader_test";
@@ -292,9 +292,12 @@ TEST(PsnrReader, ReadsBinaryCloudsAsTheGeneralReaderAndLeavesOtherLayouts) {
   d.double_positions = false;
   d.triangles = {{0, 1, 2}};
   ply::write(dir / "faces.ply", d);
+  d.triangles.clear();
+  d.positions[7][1] = std::nan("");
+  ply::write(dir / "nan.ply", d);
   fs::copy_file(dir / "plain.ply", dir / "short.ply");
   fs::resize_file(dir / "short.ply", fs::file_size(dir / "plain.ply") - 1);
-  for (const char* other : {"ascii.ply", "double.ply", "faces.ply", "short.ply"}) {
+  for (const char* other : {"ascii.ply", "double.ply", "faces.ply", "nan.ply", "short.ply"}) {
     EXPECT_FALSE(detail::read_float_ply(dir / other)) << other;
   }
   fs::remove_all(dir);
