@@ -102,16 +102,20 @@ std::optional<double> large_float32_step(double largest, double spacing) {
   return step;
 }
 
-std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& positions,
-                                                    const std::string& file) {
+namespace {
+
+template <class Point>
+std::optional<std::string> rounding_warning(const std::vector<Point>& positions,
+                                            const std::string& file) {
   if (positions.size() < 2) return std::nullopt;
-  Vec3 lo = positions.front(), hi = lo;
+  Vec3 lo{positions.front()[0], positions.front()[1], positions.front()[2]}, hi = lo;
   double largest = 0;
-  for (const Vec3& p : positions) {
+  for (const Point& p : positions) {
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], p[a]);
-      hi[a] = std::max(hi[a], p[a]);
-      largest = std::max(largest, std::abs(p[a]));
+      const double v = p[a];
+      lo[a] = std::min(lo[a], v);
+      hi[a] = std::max(hi[a], v);
+      largest = std::max(largest, std::abs(v));
     }
   }
   const double diagonal =
@@ -127,6 +131,18 @@ std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& pos
          "spacing " + number_text(spacing) +
          " (bounding-box diagonal / sqrt(points)): the geometry has lost detail (store the " +
          "coordinates as double, or centred)";
+}
+
+}  // namespace
+
+std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& positions,
+                                                    const std::string& file) {
+  return rounding_warning(positions, file);
+}
+
+std::optional<std::string> float32_rounding_warning(
+    const std::vector<std::array<float, 3>>& positions, const std::string& file) {
+  return rounding_warning(positions, file);
 }
 
 bool parse_number(std::string_view token, double& value) { return parse_as(token, value); }

@@ -40,12 +40,13 @@
 
 #include "pca_normals.h"
 #include "psnr_engine.h"
-#include "qm3d/pointcloud/cloud_io.h"
-#include "qm3d/pointcloud/metrics.h"
+#include "psnr_reader.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
+#include "qm3d/pointcloud/cloud_io.h"
+#include "qm3d/pointcloud/metrics.h"
 
 namespace qm3d::pointcloud {
 
@@ -56,11 +57,26 @@ using detail::MpegTree;
 using detail::Point3f;
 
 const std::vector<std::string>& psnr_value_names() {
-  static const std::vector<std::string> names = {
-      "d1_mse",       "d1_psnr",      "d2_mse",           "d2_psnr",           "d1_hausdorff",
-      "d1_hausdorff_psnr", "d2_hausdorff", "d2_hausdorff_psnr", "c0_mse",      "c1_mse",
-      "c2_mse",       "c0_psnr",      "c1_psnr",          "c2_psnr",           "c0_hausdorff",
-      "c1_hausdorff", "c2_hausdorff", "c0_hausdorff_psnr", "c1_hausdorff_psnr", "c2_hausdorff_psnr"};
+  static const std::vector<std::string> names = {"d1_mse",
+                                                 "d1_psnr",
+                                                 "d2_mse",
+                                                 "d2_psnr",
+                                                 "d1_hausdorff",
+                                                 "d1_hausdorff_psnr",
+                                                 "d2_hausdorff",
+                                                 "d2_hausdorff_psnr",
+                                                 "c0_mse",
+                                                 "c1_mse",
+                                                 "c2_mse",
+                                                 "c0_psnr",
+                                                 "c1_psnr",
+                                                 "c2_psnr",
+                                                 "c0_hausdorff",
+                                                 "c1_hausdorff",
+                                                 "c2_hausdorff",
+                                                 "c0_hausdorff_psnr",
+                                                 "c1_hausdorff_psnr",
+                                                 "c2_hausdorff_psnr"};
   return names;
 }
 
@@ -102,18 +118,24 @@ std::array<float, 3> convert(PsnrColourSpace space, const Colour8& rgb) {
 
 std::array<double, 3> colour_peaks(PsnrColourSpace space) {
   switch (space) {
-    case PsnrColourSpace::kRgb: return {255, 255, 255};
-    case PsnrColourSpace::kYCoCg: return {255, 511, 511};
-    case PsnrColourSpace::kYCbCr: break;
+    case PsnrColourSpace::kRgb:
+      return {255, 255, 255};
+    case PsnrColourSpace::kYCoCg:
+      return {255, 511, 511};
+    case PsnrColourSpace::kYCbCr:
+      break;
   }
   return {1, 1, 1};
 }
 
 std::array<const char*, 3> channel_names(PsnrColourSpace space) {
   switch (space) {
-    case PsnrColourSpace::kRgb: return {"R", "G", "B"};
-    case PsnrColourSpace::kYCoCg: return {"Y", "Co", "Cg"};
-    case PsnrColourSpace::kYCbCr: break;
+    case PsnrColourSpace::kRgb:
+      return {"R", "G", "B"};
+    case PsnrColourSpace::kYCoCg:
+      return {"Y", "Co", "Cg"};
+    case PsnrColourSpace::kYCbCr:
+      break;
   }
   return {"Y", "Cb", "Cr"};
 }
@@ -179,7 +201,8 @@ std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tr
     const std::size_t found =
         average ? b_tree.tie_run_knn(na.points[i], 5, true, exactly_equal, idx, d2)
                 : b_tree.knn(na.points[i], 1, idx, d2);
-    target_count[i] = static_cast<std::uint8_t>(exact_ties(idx, d2, average ? found : std::min<std::size_t>(found, 1), targets[i].data()));
+    target_count[i] = static_cast<std::uint8_t>(
+        exact_ties(idx, d2, average ? found : std::min<std::size_t>(found, 1), targets[i].data()));
   }
   std::vector<Point3f> normals(static_cast<std::size_t>(n_b), Point3f{0, 0, 0});
   std::vector<int> counts(static_cast<std::size_t>(n_b), 0);
@@ -258,9 +281,17 @@ struct PassOutput {
   std::vector<PointErrors> per_point;  // per point of A (keep_points)
 };
 
-// One point of A against B: adds its errors to `s` and returns them.
-PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
-                    const std::vector<Point3f>* normals, const PassSettings& p, PassSums& s) {
+/// What the search finds for one point of A: its nearest point of B and the colour of the run of
+/// neighbours tied with it (with colour).
+struct PointMatch {
+  std::uint32_t nearest = 0;
+  Colour8 matched{0, 0, 0};
+};
+
+// One point of A searched in B: its match, and its D2 error in `d2_point` (with normals).
+PointMatch match_point(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
+                       const std::vector<Point3f>* normals, const PassSettings& p,
+                       double* d2_point) {
   std::uint32_t idx[kMaxNeighbours];
   double d2[kMaxNeighbours];
   const Point3f& q = a.points[i];
@@ -269,40 +300,34 @@ PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, 
   const bool run = p.colour || normals != nullptr;
   const double threshold = p.tie_threshold;
   const auto tied = [threshold](double x, double y) { return std::fabs(y - x) < threshold; };
-  const std::size_t found = run ? tree.tie_run_knn(q, 10, p.average_normals, tied, idx, d2)
-                                : tree.knn(q, 1, idx, d2);
-  const std::uint32_t j = idx[0];
+  const std::size_t found =
+      run ? tree.tie_run_knn(q, 10, p.average_normals, tied, idx, d2) : tree.knn(q, 1, idx, d2);
+  PointMatch m;
+  m.nearest = idx[0];
   std::size_t same = 1;
   if (run) {
     while (same < found && tied(d2[same - 1], d2[same])) ++same;
   }
-  const Point3f& nearest = b.points[j];
-  const double e0 = double(q[0]) - double(nearest[0]);
-  const double e1 = double(q[1]) - double(nearest[1]);
-  const double e2 = double(q[2]) - double(nearest[2]);
-  PointErrors errors;
-  const double d1 = e0 * e0 + e1 * e1 + e2 * e2;
-  errors.d1 = d1;
-  s.d1_sum += d1;
-  s.d1_max = std::max(s.d1_max, d1);
   if (normals != nullptr) {
-    double d2_point = 0.0;
+    double d2_sum = 0.0;
     if (p.average_normals) {
       for (std::size_t t = 0; t < same; ++t) {
         const Point3f& o = b.points[idx[t]];
         const Point3f& n = (*normals)[idx[t]];
         const float dot = (q[0] - o[0]) * n[0] + (q[1] - o[1]) * n[1] + (q[2] - o[2]) * n[2];
-        d2_point += std::pow(dot, 2.f);  // float powf, as pc_error's pow(float, float)
+        d2_sum += std::pow(dot, 2.f);  // float powf, as pc_error's pow(float, float)
       }
-      d2_point /= static_cast<double>(same);
+      d2_sum /= static_cast<double>(same);
     } else {
-      const Point3f& n = (*normals)[j];
-      d2_point = e0 * n[0] + e1 * n[1] + e2 * n[2];
-      d2_point *= d2_point;
+      const Point3f& o = b.points[m.nearest];
+      const Point3f& n = (*normals)[m.nearest];
+      const double e0 = double(q[0]) - double(o[0]);
+      const double e1 = double(q[1]) - double(o[1]);
+      const double e2 = double(q[2]) - double(o[2]);
+      d2_sum = e0 * n[0] + e1 * n[1] + e2 * n[2];
+      d2_sum *= d2_sum;
     }
-    errors.d2 = d2_point;
-    s.d2_sum += d2_point;
-    s.d2_max = std::max(s.d2_max, d2_point);
+    *d2_point = d2_sum;
   }
   if (p.colour) {
     unsigned int sum[3] = {0, 0, 0};
@@ -312,23 +337,49 @@ PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, 
       for (int c = 0; c < 3; ++c) sum[c] += weight * b.colours[idx[t]][c];
       merged += weight;
     }
-    Colour8 matched;
     for (int c = 0; c < 3; ++c) {
-      matched[c] = static_cast<std::uint8_t>(std::round(static_cast<double>(sum[c]) / merged));
+      m.matched[c] = static_cast<std::uint8_t>(std::round(static_cast<double>(sum[c]) / merged));
     }
+  }
+  return m;
+}
+
+// One point of A's errors from its match: adds them to `s` and returns them.
+PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, const PointMatch& m,
+                         const double* d2_point, const PassSettings& p, PassSums& s) {
+  const Point3f& q = a.points[i];
+  const Point3f& nearest = b.points[m.nearest];
+  const double e0 = double(q[0]) - double(nearest[0]);
+  const double e1 = double(q[1]) - double(nearest[1]);
+  const double e2 = double(q[2]) - double(nearest[2]);
+  PointErrors errors;
+  const double d1 = e0 * e0 + e1 * e1 + e2 * e2;
+  errors.d1 = d1;
+  s.d1_sum += d1;
+  s.d1_max = std::max(s.d1_max, d1);
+  if (d2_point != nullptr) {
+    errors.d2 = *d2_point;
+    s.d2_sum += *d2_point;
+    s.d2_max = std::max(s.d2_max, *d2_point);
+  }
+  if (p.colour) {
     const std::array<float, 3> in = convert(p.space, a.colours[i]);
-    const std::array<float, 3> out = convert(p.space, matched);
+    const std::array<float, 3> out = convert(p.space, m.matched);
     for (int c = 0; c < 3; ++c) {
       const float diff = in[c] - out[c];
       errors.colour[c] = static_cast<float>(diff * diff);
       s.colour_sum[c] += errors.colour[c];
-      const int rgb = int(a.colours[i][c]) - int(matched[c]);
+      const int rgb = int(a.colours[i][c]) - int(m.matched[c]);
       s.rgb_max[c] = std::max(s.rgb_max[c], static_cast<double>(rgb * rgb));
     }
   }
   return errors;
 }
 
+// One direction: every point of A searched in B, its errors summed in fixed chunks of A's
+// points (the same sums for any thread count). Searching in the query tree's leaf order instead
+// (spatially coherent queries, the matches kept for the sums in point order) was measured: no
+// faster here (the scattered reads and writes cost what the cache saves) and 8 bytes a point more.
 PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tree,
                     const std::vector<Point3f>* normals, const PassSettings& p, int threads) {
   PassOutput out;
@@ -342,7 +393,9 @@ PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tr
     const std::size_t last = std::min(a.size(), first + kChunk);
     PassSums s;
     for (std::size_t i = first; i < last; ++i) {
-      const PointErrors e = point_errors(a, i, b, b_tree, normals, p, s);
+      double d2 = 0;
+      const PointMatch m = match_point(a, i, b, b_tree, normals, p, &d2);
+      const PointErrors e = point_errors(a, i, b, m, normals ? &d2 : nullptr, p, s);
       if (p.keep_points) out.per_point[i] = e;
     }
     partial[c] = s;
@@ -391,7 +444,8 @@ NamedValues pass_values(const PassOutput& o, double peak, bool d2, const PassSet
     mse[c] = o.sums.colour_sum[c] / n;
     v.emplace_back("c" + std::to_string(c) + "_mse", mse[c]);
   }
-  for (int c = 0; c < 3; ++c) v.emplace_back("c" + std::to_string(c) + "_psnr", psnr_of(mse[c], peaks[c]));
+  for (int c = 0; c < 3; ++c)
+    v.emplace_back("c" + std::to_string(c) + "_psnr", psnr_of(mse[c], peaks[c]));
   if (!hausdorff) return v;
   std::array<double, 3> h;
   for (int c = 0; c < 3; ++c) {
@@ -415,8 +469,8 @@ NamedValues symmetric_values(const NamedValues& a, const NamedValues& b) {
   return out;
 }
 
-// per_element: each input point's D1 error (a merged duplicate takes its run's); per_element_values:
-// its D2 error (with normals) and colour errors (with colour).
+// per_element: each input point's D1 error (a merged duplicate takes its run's);
+// per_element_values: its D2 error (with normals) and colour errors (with colour).
 DirectionResult direction_result(const NamedValues& values, const PassOutput& o,
                                  const MpegCloud& iterated, bool per_element, bool d2,
                                  bool colour) {
@@ -432,7 +486,8 @@ DirectionResult direction_result(const NamedValues& values, const PassOutput& o,
     return v;
   };
   d.per_element = on_input([](const PointErrors& e) { return e.d1; });
-  if (d2) d.per_element_values.emplace_back("d2", on_input([](const PointErrors& e) { return e.d2; }));
+  if (d2)
+    d.per_element_values.emplace_back("d2", on_input([](const PointErrors& e) { return e.d2; }));
   for (int c = 0; colour && c < 3; ++c) {
     d.per_element_values.emplace_back("c" + std::to_string(c),
                                       on_input([c](const PointErrors& e) { return e.colour[c]; }));
@@ -442,47 +497,56 @@ DirectionResult direction_result(const NamedValues& values, const PassOutput& o,
 
 // ---- checks -------------------------------------------------------------------------------------
 
-void check_cloud(const ColoredCloud& c, const std::string& name, bool colour) {
-  if (c.positions.empty()) throw NumericError("psnr: " + name + ": the cloud is empty");
-  for (std::size_t i = 0; i < c.positions.size(); ++i) {
-    for (double v : c.positions[i]) {
+// The checks of a cloud's points and colours (`Point`: Vec3 as read, or Point3f from psnr's own
+// reader: the same values, the same messages).
+template <class Point>
+void check_cloud(const std::vector<Point>& positions, std::size_t colours, const std::string& name,
+                 bool colour) {
+  if (positions.empty()) throw NumericError("psnr: " + name + ": the cloud is empty");
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const double v = positions[i][k];
       if (!std::isfinite(v) || std::fabs(v) > FLT_MAX) {
         throw NumericError("psnr: " + name + ": point " + std::to_string(i) +
-                           " has a coordinate that is not a finite float32 (" + short_number(v) + ")");
+                           " has a coordinate that is not a finite float32 (" + short_number(v) +
+                           ")");
       }
     }
   }
   for (int k = 0; k < 3; ++k) {
-    const auto [lo, hi] = std::minmax_element(
-        c.positions.begin(), c.positions.end(),
-        [k](const Vec3& a, const Vec3& b) { return a[k] < b[k]; });
+    const auto [lo, hi] =
+        std::minmax_element(positions.begin(), positions.end(),
+                            [k](const Point& a, const Point& b) { return a[k] < b[k]; });
     if (!std::isfinite(static_cast<float>((*hi)[k]) - static_cast<float>((*lo)[k]))) {
       throw NumericError("psnr: " + name + ": the cloud spans more than float32 can hold (" +
                          short_number((*lo)[k]) + " to " + short_number((*hi)[k]) +
                          "; pc_error's distances overflow): scale the cloud down");
     }
   }
-  if (colour && c.colors.empty()) {
-    throw FormatError(name + ": no vertex colours (psnr's colour values need one colour per point; "
+  if (colour && colours == 0) {
+    throw FormatError(name +
+                      ": no vertex colours (psnr's colour values need one colour per point; "
                       "give --no-color for geometry only)");
   }
-  if (colour && c.colors.size() != c.positions.size()) {
-    throw FormatError(name + ": " + std::to_string(c.positions.size()) + " points but " +
-                      std::to_string(c.colors.size()) + " colours");
+  if (colour && colours != positions.size()) {
+    throw FormatError(name + ": " + std::to_string(positions.size()) + " points but " +
+                      std::to_string(colours) + " colours");
   }
 }
 
-void check_normals(const std::vector<Vec3>& normals, std::size_t points, const std::string& name) {
+template <class Point>
+void check_normals(const std::vector<Point>& normals, std::size_t points, const std::string& name) {
   if (normals.empty()) return;
   if (normals.size() != points) {
     throw FormatError(name + ": " + std::to_string(normals.size()) + " normals for " +
                       std::to_string(points) + " reference points (one normal per point needed)");
   }
   for (std::size_t i = 0; i < normals.size(); ++i) {
-    for (double v : normals[i]) {
+    for (int k = 0; k < 3; ++k) {
+      const double v = normals[i][k];
       if (!std::isfinite(v) || std::fabs(v) > FLT_MAX) {
-        throw FormatError(name + ": the normal of point " + std::to_string(i) +
-                          " is not finite (" + short_number(v) + ")");
+        throw FormatError(name + ": the normal of point " + std::to_string(i) + " is not finite (" +
+                          short_number(v) + ")");
       }
     }
   }
@@ -536,7 +600,9 @@ void warn_of_tie_threshold(double threshold, double spacing, const std::string& 
                      ") is so small that " + tool + "'s absolute tie threshold (" +
                      short_number(threshold) +
                      " on squared distances) treats neighbours at different distances as "
-                     "tied, as " + tool + " does: colour and D2 values depend on the unit; "
+                     "tied, as " +
+                     tool +
+                     " does: colour and D2 values depend on the unit; "
                      "scale the inputs up (e.g. to millimetres) for unit-independent values");
 }
 
@@ -545,6 +611,22 @@ double typical_spacing(const BoundingBox& box, std::size_t points) {
   double d2 = 0;
   for (int k = 0; k < 3; ++k) d2 += (box.max[k] - box.min[k]) * (box.max[k] - box.min[k]);
   return std::sqrt(d2) / std::sqrt(static_cast<double>(points));
+}
+
+/// The warning of coordinates far from the origin for pc_error's float32 arithmetic (none: "").
+template <class Point>
+std::string far_from_origin_warning(const std::vector<Point>& positions, const std::string& name) {
+  BoundingBox box{{positions[0][0], positions[0][1], positions[0][2]},
+                  {positions[0][0], positions[0][1], positions[0][2]}};
+  for (const Point& p : positions) {
+    for (int k = 0; k < 3; ++k) {
+      box.min[k] = std::min<double>(box.min[k], p[k]);
+      box.max[k] = std::max<double>(box.max[k], p[k]);
+    }
+  }
+  return float32_precision_warning(box.min, box.max, typical_spacing(box, positions.size()),
+                                   "typical point spacing, box diagonal / sqrt(points)",
+                                   "psnr: " + name, "pc_error");
 }
 
 /// --normals estimate: ../shared/tools/add_pca_normals.py's normals (float32, as it writes them).
@@ -619,8 +701,8 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
     }
     peak = nn.max;
     if (options.colour || d2) {
-      warn_of_tie_threshold(conventions.tie_threshold, nn.max, reference_name,
-                            conventions.tool, result.warnings);
+      warn_of_tie_threshold(conventions.tie_threshold, nn.max, reference_name, conventions.tool,
+                            result.warnings);
     }
     details["nn_min"] = nn.min;
     details["nn_max"] = nn.max;
@@ -630,7 +712,8 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
   details["points_distorted"] = b.size();
   details["duplicates_reference"] = a.duplicates;
   details["duplicates_distorted"] = b.duplicates;
-  if (d2) details["d2_normals"] = own_normals ? "distorted's own" : "transferred from the reference";
+  if (d2)
+    details["d2_normals"] = own_normals ? "distorted's own" : "transferred from the reference";
 
   progress.begin("normals");
   std::vector<Point3f> b_normals;
@@ -690,61 +773,48 @@ MetricResult finished(MetricResult result, nlohmann::json details, const char* t
 
 }  // namespace
 
-MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals& reference_normals,
-                          const ColoredCloud& distorted, const PsnrOptions& options,
-                          const std::string& reference_name, const std::string& distorted_name) {
-  const auto start = std::chrono::steady_clock::now();
-  check_thread_count(options.threads);
-  check_peak(options.peak);
-  check_cloud(reference, reference_name, options.colour);
-  check_cloud(distorted, distorted_name, options.colour);
-  ProgressSteps progress(options.progress, 4);
-  MetricResult result;
-  result.metric = "psnr";
-  // Before loading: the inputs may be released once loaded (options.inputs_done).
-  for (const auto& [cloud, name] : {std::pair{&reference, &reference_name},
-                                    std::pair{&distorted, &distorted_name}}) {
-    const BoundingBox box = bounding_box(cloud->positions);
-    const std::string w = float32_precision_warning(
-        box.min, box.max, typical_spacing(box, cloud->positions.size()),
-        "typical point spacing, box diagonal / sqrt(points)", "psnr: " + *name,
-        "pc_error");
-    if (!w.empty()) result.warnings.push_back(w);
-  }
+namespace {
 
-  progress.begin("loading");
-  const int dups = static_cast<int>(options.duplicates);
-  const bool weighted = options.tied == TiedNeighbours::kWeightedAverage;
-  const bool separate = !options.estimate_normals && !reference_normals.positions.empty();
-  const std::vector<Vec3> estimated =
-      options.estimate_normals ? estimated_normals(reference.positions, options.threads)
-                               : std::vector<Vec3>{};
-  const std::vector<Vec3>& own_normals =
-      options.estimate_normals ? estimated : separate ? std::vector<Vec3>{} : reference_normals.normals;
-  const std::string normals_name =
-      separate ? reference_normals.name : reference_name;
-  check_normals(separate ? reference_normals.normals : own_normals,
-                separate ? reference_normals.positions.size() : reference.positions.size(),
-                normals_name);
-  const std::vector<Rgb>* ref_colours = options.colour ? &reference.colors : nullptr;
-  const std::vector<Rgb>* dist_colours = options.colour ? &distorted.colors : nullptr;
-  auto a_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async, [&] {
-    return detail::load_mpeg_cloud(reference.positions, ref_colours, own_normals, dups, weighted);
-  });
-  const MpegCloud b = detail::load_mpeg_cloud(distorted.positions, dist_colours, {}, dups, weighted);
+/// A pc_error comparison's inputs once checked and rounded to float32. `a.normals`: the
+/// reference's own normals (or estimated); `normals_file`: a separate normals file (pc_error -n;
+/// its positions empty when there is none).
+struct FloatInputs {
+  detail::FloatCloud a, b;
+  const ReferenceNormals* normals_file = nullptr;
+};
+
+/// Everything from loading on (compute_psnr and psnr's own file reader): the two clouds loaded
+/// (concurrently, each freed as it is sorted) and compared.
+MetricResult psnr_of_floats(FloatInputs in, const PsnrOptions& options,
+                            const std::string& reference_name, MetricResult result,
+                            ProgressSteps& progress, std::chrono::steady_clock::time_point start) {
+  const bool separate = in.normals_file != nullptr && !in.normals_file->positions.empty();
+  const std::string normals_name = separate ? in.normals_file->name : reference_name;
+  detail::LoadRules rules;
+  rules.duplicates = static_cast<int>(options.duplicates);
+  rules.weighted = options.tied == TiedNeighbours::kWeightedAverage;
+  rules.keep_of_input = options.per_element;
+  auto a_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
+                           [&] { return detail::load_mpeg_cloud(std::move(in.a), rules); });
+  const MpegCloud b = detail::load_mpeg_cloud(std::move(in.b), rules);
   const MpegCloud a = a_task.get();
   // A normals file is a cloud of its own (pc_error loads it with the same duplicate rule).
-  const std::optional<MpegCloud> file_normals =
-      separate ? std::optional<MpegCloud>(detail::load_mpeg_cloud(
-                     reference_normals.positions, nullptr, reference_normals.normals, dups, false))
-               : std::nullopt;
+  std::optional<MpegCloud> file_normals;
+  if (separate) {
+    detail::LoadRules file_rules = rules;
+    file_rules.weighted = false;
+    file_normals = detail::load_mpeg_cloud(
+        detail::float_cloud(in.normals_file->positions, nullptr, in.normals_file->normals),
+        file_rules);
+  }
   if (file_normals && file_normals->size() != a.size()) {
     throw FormatError(normals_name + ": " + std::to_string(file_normals->size()) +
                       " points (after duplicates) for the reference's " + std::to_string(a.size()) +
                       " (--normals needs one normal per reference point)");
   }
   if (file_normals && file_normals->points != a.points) {
-    result.warnings.push_back("psnr: " + normals_name + ": its points are not the reference's; "
+    result.warnings.push_back("psnr: " + normals_name +
+                              ": its points are not the reference's; "
                               "as pc_error, its normals are paired with the reference's points "
                               "by their order after sorting");
   }
@@ -765,6 +835,99 @@ MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals&
   compare_loaded(a, b, na, peak, options, Conventions{}, reference_name, progress, details, result);
   return finished(std::move(result), std::move(details), kPcErrorTool, start, progress);
 }
+
+/// The checks and warnings before loading, on the points as read (`Point`: Vec3 or Point3f).
+template <class Point>
+void check_inputs(const std::vector<Point>& reference, std::size_t reference_colours,
+                  const std::vector<Point>& distorted, std::size_t distorted_colours,
+                  const PsnrOptions& options, const std::string& reference_name,
+                  const std::string& distorted_name, std::vector<std::string>& warnings) {
+  check_thread_count(options.threads);
+  check_peak(options.peak);
+  check_cloud(reference, reference_colours, reference_name, options.colour);
+  check_cloud(distorted, distorted_colours, distorted_name, options.colour);
+  for (const auto& [cloud, name] :
+       {std::pair{&reference, &reference_name}, std::pair{&distorted, &distorted_name}}) {
+    const std::string w = far_from_origin_warning(*cloud, *name);
+    if (!w.empty()) warnings.push_back(w);
+  }
+}
+
+/// The reference's own normals (`own`, as read) checked, or with --normals estimate computed,
+/// as float32; a normals file's are checked here and loaded with the clouds.
+template <class Point>
+std::vector<Point3f> own_normals(const std::vector<Point>& positions, const std::vector<Point>& own,
+                                 const ReferenceNormals& file, const PsnrOptions& options,
+                                 const std::string& reference_name) {
+  if (options.estimate_normals) {
+    std::vector<Vec3> p(positions.size());
+    for (std::size_t i = 0; i < p.size(); ++i)
+      p[i] = {positions[i][0], positions[i][1], positions[i][2]};
+    const std::vector<Vec3> estimated = estimated_normals(p, options.threads);
+    check_normals(estimated, positions.size(), reference_name);
+    return detail::float_cloud({}, nullptr, estimated).normals;
+  }
+  if (!file.positions.empty()) {
+    check_normals(file.normals, file.positions.size(), file.name);
+    return {};
+  }
+  check_normals(own, positions.size(), reference_name);
+  std::vector<Point3f> out(own.size());
+  for (std::size_t i = 0; i < own.size(); ++i) {
+    for (int k = 0; k < 3; ++k) out[i][k] = static_cast<float>(own[i][k]);
+  }
+  return out;
+}
+
+}  // namespace
+
+MetricResult compute_psnr(const ColoredCloud& reference, const ReferenceNormals& reference_normals,
+                          const ColoredCloud& distorted, const PsnrOptions& options,
+                          const std::string& reference_name, const std::string& distorted_name) {
+  const auto start = std::chrono::steady_clock::now();
+  MetricResult result;
+  result.metric = "psnr";
+  check_inputs(reference.positions, reference.colors.size(), distorted.positions,
+               distorted.colors.size(), options, reference_name, distorted_name, result.warnings);
+  ProgressSteps progress(options.progress, 4);
+  progress.begin("loading");
+  FloatInputs in;
+  in.a = detail::float_cloud(reference.positions, options.colour ? &reference.colors : nullptr, {});
+  in.a.normals = own_normals(reference.positions, reference_normals.normals, reference_normals,
+                             options, reference_name);
+  in.b = detail::float_cloud(distorted.positions, options.colour ? &distorted.colors : nullptr, {});
+  in.normals_file = options.estimate_normals ? nullptr : &reference_normals;
+  return psnr_of_floats(std::move(in), options, reference_name, std::move(result), progress, start);
+}
+
+namespace {
+
+/// compute_psnr on two clouds as psnr's own reader gives them (psnr_reader.h).
+MetricResult psnr_of_files(detail::FloatCloudFile reference, const ReferenceNormals& normals_file,
+                           detail::FloatCloudFile distorted, const PsnrOptions& options,
+                           const std::string& reference_name, const std::string& distorted_name) {
+  const auto start = std::chrono::steady_clock::now();
+  MetricResult result;
+  result.metric = "psnr";
+  const detail::FloatCloud& a = reference.cloud;
+  const detail::FloatCloud& b = distorted.cloud;
+  check_inputs(a.positions, a.colours.size(), b.positions, b.colours.size(), options,
+               reference_name, distorted_name, result.warnings);
+  ProgressSteps progress(options.progress, 4);
+  progress.begin("loading");
+  FloatInputs in;
+  in.a.normals = own_normals(a.positions, a.normals, normals_file, options, reference_name);
+  in.a.positions = std::move(reference.cloud.positions);
+  if (options.colour) in.a.colours = std::move(reference.cloud.colours);
+  in.b.positions = std::move(distorted.cloud.positions);
+  if (options.colour) in.b.colours = std::move(distorted.cloud.colours);
+  reference = {};
+  distorted = {};
+  in.normals_file = options.estimate_normals ? nullptr : &normals_file;
+  return psnr_of_floats(std::move(in), options, reference_name, std::move(result), progress, start);
+}
+
+}  // namespace
 
 namespace {
 
@@ -820,12 +983,14 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   check_peak(options.peak);
   if (!sampler) throw std::logic_error("psnr: no grid sampler (the mesh module is not linked)");
   if (options.estimate_normals) {
-    throw std::invalid_argument("normals: two meshes are compared on their samples' face "
-                                "normals; --normals does not apply to meshes");
+    throw std::invalid_argument(
+        "normals: two meshes are compared on their samples' face "
+        "normals; --normals does not apply to meshes");
   }
   for (const Input* in : {&reference, &distorted}) {
     if (!in->is_mesh()) {
-      throw FormatError(in->name() + ": a point cloud; psnr compares two meshes (sampled on one "
+      throw FormatError(in->name() +
+                        ": a point cloud; psnr compares two meshes (sampled on one "
                         "grid) or two clouds, not a mesh with a cloud (sample the mesh first: "
                         "qm3d sample --mode grid)");
     }
@@ -843,13 +1008,12 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   g.bilinear = options.bilinear;
   g.threads = options.threads;
   const FloatBox& fb = *g.box;
-  const float grid_step = std::max({fb.max[0] - fb.min[0], fb.max[1] - fb.min[1],
-                                    fb.max[2] - fb.min[2]}) /
-                          static_cast<float>(options.grid_size - 1);
+  const float grid_step =
+      std::max({fb.max[0] - fb.min[0], fb.max[1] - fb.min[1], fb.max[2] - fb.min[2]}) /
+      static_cast<float>(options.grid_size - 1);
   const std::string far = float32_precision_warning(
       Vec3{fb.min[0], fb.min[1], fb.min[2]}, Vec3{fb.max[0], fb.max[1], fb.max[2]}, grid_step,
-      "grid step",
-      "psnr: " + reference.name() + ", " + distorted.name(), "mmetric");
+      "grid step", "psnr: " + reference.name() + ", " + distorted.name(), "mmetric");
   if (!far.empty()) result.warnings.push_back(far);
   GridSamples sa = sampler(reference, g);
   GridSamples sb = sampler(distorted, g);
@@ -859,7 +1023,8 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   PsnrOptions o = options;
   if (o.colour && (sa.colours.empty() || sb.colours.empty())) {
     const std::string& name = sa.colours.empty() ? reference.name() : distorted.name();
-    result.warnings.push_back("psnr: " + name + " has no vertex colours: geometry values only "
+    result.warnings.push_back("psnr: " + name +
+                              " has no vertex colours: geometry values only "
                               "(as mmetric)");
     o.colour = false;
   }
@@ -874,9 +1039,8 @@ MetricResult compute_mesh_psnr(const Input& reference, const Input& distorted,
   details["conventions"] = {{"tool", "mmetric 1.1.7 compare --mode pcc"},
                             {"tie_threshold", kMmetricTieThreshold},
                             {"duplicate_normals", "averaged (unnormalised)"}};
-  const std::optional<double> peak =
-      options.peak ? static_cast<float>(*options.peak)
-                   : static_cast<float>(box_diagonal(sa.positions));
+  const std::optional<double> peak = options.peak ? static_cast<float>(*options.peak)
+                                                  : static_cast<float>(box_diagonal(sa.positions));
   details["peak_source"] = options.peak
                                ? "given"
                                : "diagonal of the reference's sampled cloud's box, mmetric's "
@@ -918,8 +1082,8 @@ MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
   const auto start = std::chrono::steady_clock::now();
   check_thread_count(options.threads);
   check_peak(options.peak);
-  check_cloud(reference, reference_name, options.colour);
-  check_cloud(distorted, distorted_name, options.colour);
+  check_cloud(reference.positions, reference.colors.size(), reference_name, options.colour);
+  check_cloud(distorted.positions, distorted.colors.size(), distorted_name, options.colour);
   check_normals(reference_normals, reference.positions.size(), reference_name);
   check_normals(distorted_normals, distorted.positions.size(), distorted_name);
   ProgressSteps progress(options.progress, 4);
@@ -930,8 +1094,8 @@ MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
   const int dups = static_cast<int>(options.duplicates);
   const bool weighted = options.tied == TiedNeighbours::kWeightedAverage;
   const auto load = [&](const ColoredCloud& c, const std::vector<Vec3>& normals) {
-    return detail::load_mpeg_cloud(c.positions, options.colour ? &c.colors : nullptr, normals,
-                                   dups, weighted, true);
+    return detail::load_mpeg_cloud(c.positions, options.colour ? &c.colors : nullptr, normals, dups,
+                                   weighted, true);
   };
   const MpegCloud a = load(reference, reference_normals);
   const MpegCloud b = load(distorted, distorted_normals);
@@ -942,7 +1106,8 @@ MetricResult compute_psnr_mmetric(const ColoredCloud& reference,
   if (options.inputs_done) options.inputs_done();
   const float diagonal = static_cast<float>(box_diagonal(a_points));
   if (!options.peak && !(diagonal > 0)) {
-    throw NumericError("psnr: " + reference_name + ": its box has no extent, so its diagonal "
+    throw NumericError("psnr: " + reference_name +
+                       ": its box has no extent, so its diagonal "
                        "gives no peak; give --peak");
   }
   const double peak = options.peak ? static_cast<float>(*options.peak) : diagonal;
@@ -978,10 +1143,162 @@ PsnrColourSpace parse_colour_space(const std::string& name) {
 ReferenceNormals normals_file(const std::string& path) {
   CloudData c = read_cloud_data(path, CloudFormat::kPly);
   if (c.normals.empty()) {
-    throw FormatError(path + ": no normals (nx, ny, nz vertex properties), which --normals FILE "
+    throw FormatError(path +
+                      ": no normals (nx, ny, nz vertex properties), which --normals FILE "
                       "needs");
   }
   return ReferenceNormals{std::move(c.normals), std::move(c.cloud.positions), path};
+}
+
+// Each line of `a`, then those of `b` not in `a` (two inputs' reader warnings: the same file may
+// be both).
+std::vector<std::string> merged_lines(std::vector<std::string> a,
+                                      const std::vector<std::string>& b) {
+  for (const std::string& w : b) {
+    if (std::find(a.begin(), a.end(), w) == a.end()) a.push_back(w);
+  }
+  return a;
+}
+
+// What run_metric does for a metric that does not read its files: both inputs read as `kind`
+// (concurrently unless one thread was asked for), their coordinate range checked; returns the
+// cloud readers' warnings.
+std::vector<std::string> read_inputs(const Input& ref, const Input& dist, Input::Kind kind,
+                                     int threads) {
+  auto ref_task = std::async(threads == 1 ? std::launch::deferred : std::launch::async,
+                             [&] { ref.load(kind); });
+  dist.load(kind);
+  ref_task.get();
+  const bool clouds = kind == Input::Kind::kCloud;
+  const std::vector<std::string> reading =
+      clouds ? merged_lines(ref.cloud_warnings(), dist.cloud_warnings())
+             : std::vector<std::string>{};
+  for (const Input* in : {&ref, &dist}) {
+    check_coordinate_range(clouds ? in->cloud().positions : in->mesh().mesh.positions, in->name());
+  }
+  return reading;
+}
+
+bool own_reader_may_read(const Input& in) {
+  return !in.is_mesh() && in.format() == FileFormat::kPly && !in.path().empty() &&
+         in.path().string() == in.name();  // not a spooled pipe
+}
+
+// Both clouds read by psnr's own reader, or nullopt when it does not apply to one of them. Its
+// values are float32 (no coordinate reaches check_coordinate_range's limits).
+std::optional<std::pair<detail::FloatCloudFile, detail::FloatCloudFile>> read_own(const Input& ref,
+                                                                                  const Input& dist,
+                                                                                  int threads) {
+  if (!own_reader_may_read(ref) || !own_reader_may_read(dist)) return std::nullopt;
+  auto ref_task = std::async(threads == 1 ? std::launch::deferred : std::launch::async,
+                             [&] { return detail::read_float_ply(ref.path()); });
+  std::optional<detail::FloatCloudFile> b = detail::read_float_ply(dist.path());
+  std::optional<detail::FloatCloudFile> a = ref_task.get();
+  if (!a || !b) return std::nullopt;
+  return std::pair{std::move(*a), std::move(*b)};
+}
+
+/// The options of a run (--peak, --color-space, ...) as compute_psnr / compute_mesh_psnr take
+/// them.
+MeshPsnrOptions psnr_options(const RunOptions& run, const OptionValues& v) {
+  MeshPsnrOptions o;
+  static_cast<RunOptions&>(o) = run;
+  const double peak = v.at("peak").get<double>();
+  if (peak > 0) o.peak = peak;
+  o.colour_space = parse_colour_space(v.at("color_space").get<std::string>());
+  o.duplicates = static_cast<DuplicatePoints>(v.at("drop_duplicates").get<int>());
+  o.tied = static_cast<TiedNeighbours>(v.at("neighbours").get<int>());
+  o.average_normals = v.at("average_normals").get<bool>();
+  o.hausdorff = !v.at("no_hausdorff").get<bool>();
+  o.colour = !v.at("no_color").get<bool>();
+  o.estimate_normals = v.at("normals").get<std::string>() == "estimate";
+  return o;
+}
+
+/// Two PLY clouds of the common layout compared by pc_error's rules, read by psnr's own reader
+/// straight to float32 (psnr_reader.h); nullopt when it does not apply (read_inputs then).
+std::optional<MetricResult> run_on_own_reads(const Input& ref, const Input& dist,
+                                             const PsnrOptions& o, const OptionValues& v) {
+  const std::string normals = v.at("normals").get<std::string>();
+  if (ref.is_mesh() || dist.is_mesh() || v.at("conventions").get<std::string>() == "mmetric" ||
+      v.at("d2_normals").get<std::string>() == "own") {
+    return std::nullopt;
+  }
+  auto files = read_own(ref, dist, o.threads);
+  if (!files) return std::nullopt;
+  const std::vector<std::string> reading =
+      merged_lines(files->first.warnings, files->second.warnings);
+  const ReferenceNormals given =
+      normals.empty() || o.estimate_normals ? ReferenceNormals{} : normals_file(normals);
+  const bool own = !files->first.cloud.normals.empty();
+  MetricResult r = psnr_of_files(std::move(files->first), given, std::move(files->second), o,
+                                 ref.name(), dist.name());
+  r.details["normals"] = o.estimate_normals ? "estimated"
+                         : !normals.empty() ? normals
+                         : own              ? "reference file"
+                                            : "none";
+  r.warnings.insert(r.warnings.begin(), reading.begin(), reading.end());
+  return r;
+}
+
+/// psnr on inputs read as run_metric reads them: two meshes (mmetric's grid), two clouds by
+/// mmetric's conventions, or two clouds by pc_error's.
+MetricResult run_on_inputs(const GridSampler& grid_sampler, const Input& ref, const Input& dist,
+                           MeshPsnrOptions o, const OptionValues& v) {
+  const std::string normals = v.at("normals").get<std::string>();
+  const std::string d2_normals = v.at("d2_normals").get<std::string>();
+  const std::string conventions = v.at("conventions").get<std::string>();
+  if (ref.is_mesh() != dist.is_mesh()) {
+    const Input& mesh = ref.is_mesh() ? ref : dist;
+    throw FormatError("psnr: " + mesh.name() +
+                      " is a mesh and the other input a cloud; psnr "
+                      "compares two meshes (sampled on one grid) or two clouds: sample the "
+                      "mesh first (qm3d sample --mode grid)");
+  }
+  if (ref.is_mesh() && dist.is_mesh()) {
+    if (conventions == "pc_error") {
+      throw std::invalid_argument(
+          "conventions: two meshes are sampled and compared as mmetric "
+          "does; pc_error applies to clouds");
+    }
+    if (!normals.empty()) {
+      throw std::invalid_argument(
+          "normals: two meshes are compared on their samples' face "
+          "normals; --normals applies to clouds");
+    }
+    o.grid_size = v.at("grid_size").get<int>();
+    o.d2_normals = d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn;
+    o.bilinear = v.at("bilinear").get<bool>();
+    return compute_mesh_psnr(ref, dist, grid_sampler, o);
+  }
+  if (conventions == "mmetric") {
+    if (!normals.empty()) {
+      throw std::invalid_argument(
+          "normals: with conventions mmetric each cloud's own normals "
+          "are used (as mm compare); --normals applies to pc_error's");
+    }
+    MetricResult r = compute_psnr_mmetric(
+        ref.cloud(), ref.cloud_normals(), dist.cloud(), dist.cloud_normals(), o,
+        d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn, ref.name(),
+        dist.name());
+    r.details["normals"] = ref.cloud_normals().empty() ? "none" : "each file's own";
+    return r;
+  }
+  if (d2_normals == "own") {
+    throw std::invalid_argument(
+        "d2_normals: own applies to two meshes, or to two clouds with "
+        "--conventions mmetric; pc_error transfers the reference's "
+        "normals");
+  }
+  const ReferenceNormals given = normals.empty() || o.estimate_normals
+                                     ? ReferenceNormals{ref.cloud_normals(), {}, {}}
+                                     : normals_file(normals);
+  MetricResult r = compute_psnr(ref.cloud(), given, dist.cloud(), o, ref.name(), dist.name());
+  r.details["normals"] = o.estimate_normals      ? "estimated"
+                         : !normals.empty()      ? normals
+                         : given.normals.empty() ? "none"
+                                                 : "reference file";
+  return r;
 }
 
 }  // namespace
@@ -1013,26 +1330,37 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
   s.per_element_on_input = true;
   s.value_names = psnr_value_names();
   for (const std::string& n : s.value_names) {
-    if (n.size() > 5 && n.compare(n.size() - 5, 5, "_psnr") == 0) s.quality_value_names.push_back(n);
+    if (n.size() > 5 && n.compare(n.size() - 5, 5, "_psnr") == 0)
+      s.quality_value_names.push_back(n);
   }
   s.options = {
       {"peak",
        "Peak p of the geometry PSNRs, 10 log10(3 p^2 / mse) (pc_error -r, e.g. 1023 for 10-bit "
        "voxels); 0 = pc_error's default: the largest nearest-neighbour distance in the "
        "reference (echoed in the output)",
-       0.0, {}, 0, 3.4e38},
+       0.0,
+       {},
+       0,
+       3.4e38},
       {"color_space",
        "Colour space of the colour values: ycbcr (BT.709, peak 1; pc_error --mseSpace 1), rgb "
        "(peak 255; 0), ycocg (YCoCg-R, peaks 255/511/511; 8)",
-       "ycbcr", {"ycbcr", "rgb", "ycocg"}},
+       "ycbcr",
+       {"ycbcr", "rgb", "ycocg"}},
       {"drop_duplicates",
        "Points of equal coordinates in a cloud: 0 keep, 1 keep the first, 2 merge them into one "
        "with their mean colour (pc_error --dropdups)",
-       2, {}, 0, 2},
+       2,
+       {},
+       0,
+       2},
       {"neighbours",
        "Colour of several nearest neighbours at the same distance: 1 their mean, 2 their mean "
        "weighted by the duplicates each merged (pc_error --neighborsProc)",
-       1, {}, 1, 2},
+       1,
+       {},
+       1,
+       2},
       {"average_normals",
        "D2 over every nearest neighbour at the same distance and normals transferred by "
        "averaging (pc_error --averageNormals=1); false: the first neighbour only",
@@ -1045,19 +1373,24 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
       {"grid_size",
        "Two meshes: grid nodes along the longest side of the union of their vertex boxes, "
        "both sampled on that grid (mm sample --mode grid --gridSize; the CTC's 1024)",
-       1024, {}, 2, 1000000},
+       1024,
+       {},
+       2,
+       1000000},
       {"d2_normals",
        "Normals D2 projects on in the pass reference -> distorted: auto = own for two meshes "
        "(the distorted mesh's sampled face normals, mmetric's default), transferred for clouds "
        "(the reference's normals transferred to the distorted points, pc_error; mmetric "
        "--normalCalcModificationEnable=false)",
-       "auto", {"auto", "own", "transferred"}},
+       "auto",
+       {"auto", "own", "transferred"}},
       {"conventions",
        "Whose rules: auto = pc_error's for two clouds, mmetric's for two meshes; mmetric = "
        "mmetric's compare --mode pcc also for two clouds (normals of merged duplicates averaged, "
        "D2 of the pass reference -> distorted on the distorted cloud's own normals, ties 1e-20, "
        "peak = the reference's box diagonal); pc_error = pc_error's (two clouds only)",
-       "auto", {"auto", "pc_error", "mmetric"}},
+       "auto",
+       {"auto", "pc_error", "mmetric"}},
       {"bilinear",
        "Two meshes: texture colours of a textured OBJ looked up bilinearly (mmetric --bilinear) "
        "instead of at the nearest texel",
@@ -1065,67 +1398,18 @@ MetricSpec psnr_spec(GridSampler grid_sampler) {
       {"no_hausdorff", "Leave out the Hausdorff values (pc_error without -d 1)", false},
       {"no_color", "Geometry only: leave out the colour values (pc_error without -c 1)", false},
   };
+  // psnr reads its inputs itself (read_own, read_inputs): two clouds without the general
+  // reader's double-precision copy.
+  s.reads_files = true;
   s.run = [grid_sampler](const MetricSpec&, const Input& ref, const Input& dist,
                          const RunOptions& run, const OptionValues& v) {
-    MeshPsnrOptions o;
-    static_cast<RunOptions&>(o) = run;
-    const double peak = v.at("peak").get<double>();
-    if (peak > 0) o.peak = peak;
-    o.colour_space = parse_colour_space(v.at("color_space").get<std::string>());
-    o.duplicates = static_cast<DuplicatePoints>(v.at("drop_duplicates").get<int>());
-    o.tied = static_cast<TiedNeighbours>(v.at("neighbours").get<int>());
-    o.average_normals = v.at("average_normals").get<bool>();
-    o.hausdorff = !v.at("no_hausdorff").get<bool>();
-    o.colour = !v.at("no_color").get<bool>();
-    const std::string normals = v.at("normals").get<std::string>();
-    o.estimate_normals = normals == "estimate";
-    const std::string d2_normals = v.at("d2_normals").get<std::string>();
-    const std::string conventions = v.at("conventions").get<std::string>();
-    if (ref.is_mesh() != dist.is_mesh()) {
-      const Input& mesh = ref.is_mesh() ? ref : dist;
-      throw FormatError("psnr: " + mesh.name() + " is a mesh and the other input a cloud; psnr "
-                        "compares two meshes (sampled on one grid) or two clouds: sample the "
-                        "mesh first (qm3d sample --mode grid)");
-    }
-    if (ref.is_mesh() && dist.is_mesh()) {
-      if (conventions == "pc_error") {
-        throw std::invalid_argument("conventions: two meshes are sampled and compared as mmetric "
-                                    "does; pc_error applies to clouds");
-      }
-      if (!normals.empty()) {
-        throw std::invalid_argument("normals: two meshes are compared on their samples' face "
-                                    "normals; --normals applies to clouds");
-      }
-      o.grid_size = v.at("grid_size").get<int>();
-      o.d2_normals = d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn;
-      o.bilinear = v.at("bilinear").get<bool>();
-      return compute_mesh_psnr(ref, dist, grid_sampler, o);
-    }
-    if (conventions == "mmetric") {
-      if (!normals.empty()) {
-        throw std::invalid_argument("normals: with conventions mmetric each cloud's own normals "
-                                    "are used (as mm compare); --normals applies to pc_error's");
-      }
-      MetricResult r = compute_psnr_mmetric(
-          ref.cloud(), ref.cloud_normals(), dist.cloud(), dist.cloud_normals(), o,
-          d2_normals == "transferred" ? D2Normals::kTransferred : D2Normals::kOwn, ref.name(),
-          dist.name());
-      r.details["normals"] = ref.cloud_normals().empty() ? "none" : "each file's own";
-      return r;
-    }
-    if (d2_normals == "own") {
-      throw std::invalid_argument("d2_normals: own applies to two meshes, or to two clouds with "
-                                  "--conventions mmetric; pc_error transfers the reference's "
-                                  "normals");
-    }
-    const ReferenceNormals given = normals.empty() || o.estimate_normals
-                                       ? ReferenceNormals{ref.cloud_normals(), {}, {}}
-                                       : normals_file(normals);
-    MetricResult r = compute_psnr(ref.cloud(), given, dist.cloud(), o, ref.name(), dist.name());
-    r.details["normals"] = o.estimate_normals ? "estimated"
-                           : !normals.empty() ? normals
-                           : given.normals.empty() ? "none"
-                                                   : "reference file";
+    const MeshPsnrOptions o = psnr_options(run, v);
+    if (std::optional<MetricResult> r = run_on_own_reads(ref, dist, o, v)) return *r;
+    const bool two_meshes = ref.is_mesh() && dist.is_mesh();
+    const std::vector<std::string> reading =
+        read_inputs(ref, dist, two_meshes ? Input::Kind::kMesh : Input::Kind::kCloud, run.threads);
+    MetricResult r = run_on_inputs(grid_sampler, ref, dist, o, v);
+    r.warnings.insert(r.warnings.begin(), reading.begin(), reading.end());
     return r;
   };
   return s;

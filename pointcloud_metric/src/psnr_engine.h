@@ -25,27 +25,51 @@ namespace qm3d::pointcloud::detail {
 using Point3f = std::array<float, 3>;
 using Colour8 = std::array<std::uint8_t, 3>;
 
+/// A cloud as read, at the precision pc_error reads it: float32 positions and normals, 8-bit
+/// colours (psnr's own PLY reader gives these directly; other inputs are rounded to them).
+struct FloatCloud {
+  std::vector<Point3f> positions;
+  std::vector<Colour8> colours;  ///< empty: none
+  std::vector<Point3f> normals;  ///< empty: none
+};
+
 /// A cloud as pc_error holds it after loading (P: PccPointCloud::load): float32 positions sorted
 /// lexicographically (ties by file order), duplicates handled, 8-bit colours, float32 normals.
 struct MpegCloud {
   std::vector<Point3f> points;
-  std::vector<Colour8> colours;   ///< empty: none
-  std::vector<Point3f> normals;   ///< empty: none
-  std::vector<int> merged;        ///< points a kept point stands for (nbdup; 1 unless averaged
-                                  ///< with neighborsProc 2)
-  std::vector<std::uint32_t> of_input;  ///< input point -> the point here that holds it
-  std::size_t duplicates = 0;     ///< points removed (pc_error's "N points with same coordinates")
+  std::vector<Colour8> colours;  ///< empty: none
+  std::vector<Point3f> normals;  ///< empty: none
+  std::vector<int> merged;       ///< points a kept point stands for (nbdup; 1 unless averaged
+                                 ///< with neighborsProc 2); empty unless LoadRules::weighted
+  std::vector<std::uint32_t> of_input;  ///< input point -> the point here that holds it (empty
+                                        ///< unless LoadRules::keep_of_input)
+  std::size_t duplicates = 0;  ///< points removed (pc_error's "N points with same coordinates")
 
   std::size_t size() const { return points.size(); }
 };
 
-/// Loads a cloud the way pc_error does: positions rounded to float32, colours 0..1 -> 0..255,
-/// normals to float32; sorted; runs of equal positions averaged (`duplicates` 2: colour =
-/// truncated mean, `merged` = run length when `weighted`), dropped (1: the first of each run
-/// kept) or kept (0). A merged run keeps its first normal (pc_error), or with
+/// How a cloud is loaded: pc_error's --dropdups (`duplicates` 2: colour = truncated mean,
+/// `merged` = run length when `weighted` (neighborsProc 2); 1: the first of each run kept; 0:
+/// every point kept). A merged run keeps its first normal (pc_error), or with
 /// `average_normals` their float sum (in sorted order) / count, unnormalised (mmetric's
-/// removeDuplicatePoints).
-/// `colours`: one per point, or nullptr (none); `normals`: one per point, or empty.
+/// removeDuplicatePoints). `keep_of_input`: fill MpegCloud::of_input (per-point maps).
+struct LoadRules {
+  int duplicates = 2;
+  bool weighted = false;
+  bool average_normals = false;
+  bool keep_of_input = true;
+};
+
+/// Loads a cloud the way pc_error does: sorted, duplicates as `rules` say. Takes the cloud (its
+/// arrays are freed as they are used: the sort holds 2 x 16 bytes per point).
+MpegCloud load_mpeg_cloud(FloatCloud cloud, const LoadRules& rules);
+
+/// A cloud at double precision rounded as pc_error reads it: positions and normals to float32,
+/// colours 0..1 -> 0..255 (`colours` nullptr or empty: none).
+FloatCloud float_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colours,
+                       const std::vector<Vec3>& normals);
+
+/// load_mpeg_cloud(float_cloud(...)) with `merged` and `of_input` filled.
 MpegCloud load_mpeg_cloud(const std::vector<Vec3>& positions, const std::vector<Rgb>* colours,
                           const std::vector<Vec3>& normals, int duplicates, bool weighted,
                           bool average_normals = false);

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 #include <numeric>
 #include <algorithm>
 #include <iterator>
@@ -17,6 +18,7 @@
 
 #include "mpeg_reference.h"
 #include "psnr_engine.h"
+#include "psnr_reader.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/ply.h"
@@ -238,6 +240,85 @@ TEST(PsnrLoading, CoordinatesAndNormalsBecomeFloat32) {
   const detail::MpegCloud m = detail::load_mpeg_cloud(c.positions, &c.colors, {{0.1, 0.2, 0.3}}, 2, false);
   EXPECT_EQ(m.points[0][0], 0.1f);
   EXPECT_EQ(m.normals[0][2], 0.3f);
+}
+
+// psnr's own reader (psnr_reader.h) gives what the general reader gives, rounded as pc_error reads
+// it (the same points, colours, normals and warnings); every other layout, and a file the general
+// reader refuses (a NaN coordinate), is left to the general reader.
+TEST(PsnrReader, ReadsBinaryCloudsAsTheGeneralReaderAndLeavesOtherLayouts) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "qm3d_psnr_reader_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::mt19937_64 rng(3);
+  const auto write = [&](const std::string& name, double offset, bool normals) {
+    ply::WriteData d;
+    std::vector<float> n[3];
+    for (int i = 0; i < 2000; ++i) {
+      d.positions.push_back({offset + (rng() % 100000) * 1e-3, (rng() % 100000) * 1e-3 - 50,
+                             (rng() % 3 == 0) ? 0.0 : (rng() % 100000) * 1e-3});
+      d.colors.push_back({std::uint8_t(rng()), std::uint8_t(rng()), std::uint8_t(rng())});
+      for (auto& c : n) c.push_back(static_cast<float>(rng() % 2001) * 1e-3f - 1.0f);
+    }
+    d.scalar_names = {"quality"};  // a property the reader skips
+    d.scalars.assign(d.positions.size(), 0.5f);
+    if (normals) d.extra_scalars = {{"nx", n[0]}, {"ny", n[1]}, {"nz", n[2]}};
+    ply::write(dir / name, d);
+    return d;
+  };
+  for (const auto& [name, offset, normals] :
+       {std::tuple{"plain.ply", 0.0, false}, std::tuple{"normals.ply", 0.0, true},
+        std::tuple{"far.ply", 1e7, true}}) {  // far: the float32-rounding warning
+    SCOPED_TRACE(name);
+    write(name, offset, normals);
+    const auto fast = detail::read_float_ply(dir / name);
+    ASSERT_TRUE(fast);
+    const CloudData general = read_cloud_data(dir / name, CloudFormat::kPly);
+    const detail::FloatCloud expected =
+        detail::float_cloud(general.cloud.positions, &general.cloud.colors, general.normals);
+    EXPECT_EQ(fast->cloud.positions, expected.positions);
+    EXPECT_EQ(fast->cloud.colours, expected.colours);
+    EXPECT_EQ(fast->cloud.normals, expected.normals);
+    EXPECT_EQ(fast->cloud.normals.empty(), !normals);
+    EXPECT_EQ(fast->warnings, general.warnings);
+    EXPECT_EQ(fast->warnings.empty(), offset == 0.0);
+  }
+  ply::WriteData d = write("ascii.ply", 0, false);
+  d.format = ply::Format::kAscii;
+  ply::write(dir / "ascii.ply", d);
+  d.format = ply::Format::kBinaryLittleEndian;
+  d.double_positions = true;
+  ply::write(dir / "double.ply", d);
+  d.double_positions = false;
+  d.triangles = {{0, 1, 2}};
+  ply::write(dir / "faces.ply", d);
+  d.triangles.clear();
+  d.positions[7][1] = std::nan("");
+  ply::write(dir / "nan.ply", d);
+  fs::copy_file(dir / "plain.ply", dir / "short.ply");
+  fs::resize_file(dir / "short.ply", fs::file_size(dir / "plain.ply") - 1);
+  for (const char* other : {"ascii.ply", "double.ply", "faces.ply", "nan.ply", "short.ply"}) {
+    EXPECT_FALSE(detail::read_float_ply(dir / other)) << other;
+  }
+  fs::remove_all(dir);
+}
+
+// The loading rules on float input without the optional arrays: the same cloud, no map from
+// input points, no merged counts.
+TEST(PsnrLoading, OptionalArraysAreLeftOutWhenNotAsked) {
+  const ColoredCloud c = cloud({{1, 0, 0}, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}},
+                               {{10 / 255.0, 0, 0}, {1, 1, 1}, {13 / 255.0, 1, 0}, {0, 0, 0}});
+  const detail::MpegCloud full = detail::load_mpeg_cloud(c.positions, &c.colors, {}, 2, false);
+  detail::LoadRules rules;
+  rules.keep_of_input = false;
+  const detail::MpegCloud lean =
+      detail::load_mpeg_cloud(detail::float_cloud(c.positions, &c.colors, {}), rules);
+  EXPECT_EQ(lean.points, full.points);
+  EXPECT_EQ(lean.colours, full.colours);
+  EXPECT_EQ(lean.duplicates, full.duplicates);
+  EXPECT_TRUE(lean.of_input.empty());
+  EXPECT_TRUE(lean.merged.empty());
+  EXPECT_EQ(full.of_input.size(), 4u);
 }
 
 // ---- values and bad input ------------------------------------------------------------------------

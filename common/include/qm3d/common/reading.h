@@ -88,6 +88,9 @@ std::optional<double> large_float32_step(double largest, double spacing);
 /// surface). Cheap (one pass), deterministic, and silent for N < 2 or a zero-size box.
 std::optional<std::string> float32_rounding_warning(const std::vector<Vec3>& positions,
                                                     const std::string& file);
+/// The same for positions held as float32 (the same warning as for them widened to double).
+std::optional<std::string> float32_rounding_warning(
+    const std::vector<std::array<float, 3>>& positions, const std::string& file);
 
 /// Parses a whole token as a number (a leading '+' allowed) whatever the C locale; false when
 /// the token is not a number or is out of the type's range. "nan" and "inf" are numbers.
