@@ -142,6 +142,7 @@ bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v) {
   const Vec3 w = sub(p, o);
   const double a = dot(v, v);
   if (std::fabs(a) < kClipEpsilon) return false;
+  if (far_end_clearly_inside(w, v, a, r)) return false;  // what t >= 1 below returns
   const double b = 2.0 * dot(v, w);
   const double c = dot(w, w) - r * r;
   const double delta = b * b - 4. * a * c;
