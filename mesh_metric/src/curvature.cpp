@@ -64,15 +64,15 @@ Tensor vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, Curvatur
   const Vec3& o = m.positions[v0];
   const bool strict = variant == CurvatureVariant::kGeneric;
   Tensor tensor;
-  walk_outward(m, v0, strict, scratch, [&](std::uint32_t v, std::uint32_t k, std::uint32_t w,
-                                           Vec3 vec) {
-    const Vec3 edge = vec;
-    const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
-    if (variant == CurvatureVariant::kGeneric || isect) {
-      add_edge(m, k, vec, tensor, clipped_backwards(vec, edge));
-    }
-    if (!isect) scratch.enter(w);
-  });
+  walk_outward(m, v0, strict, scratch,
+               [&](std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
+                 const Vec3 edge = vec;
+                 const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
+                 if (variant == CurvatureVariant::kGeneric || isect) {
+                   add_edge(m, k, vec, tensor, clipped_backwards(vec, edge));
+                 }
+                 if (!isect) scratch.enter(w);
+               });
   const double area = kPi * r * r;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) tensor.t[i][j] /= area;
