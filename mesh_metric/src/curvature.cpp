@@ -31,14 +31,31 @@ void add_edge_tensor(double tensor[3][3], const Vec3& vec, double coeff) {
 // with beta its dihedral angle; kNoContribution (NaN) adds nothing; kVoidsTensor
 // (DegenerateEdges::kVoidTensor) voids the tensor: MEPP2's is NaN there. Inline: it runs once per
 // edge of every walk (called out of line, the curvature stage took 3 % more time).
-inline void add_edge(const HalfedgeMesh& m, std::uint32_t k, const Vec3& vec, Tensor& tensor) {
-  const double beta = m.rings.dihedral[k];
-  if (beta == kVoidsTensor) {
+//
+// `reversed`: the clip scaled the edge by a negative t (see clipped_backwards); MEPP2 computes
+// the angle's sine from the clipped vector, so its beta has the opposite sign there.
+inline void add_edge(const HalfedgeMesh& m, std::uint32_t k, const Vec3& vec, Tensor& tensor,
+                     bool reversed) {
+  const double stored = m.rings.dihedral[k];
+  if (stored == kVoidsTensor) {
     tensor.valid = false;
-  } else if (!std::isnan(beta)) {
+  } else if (!std::isnan(stored)) {
+    const double beta = reversed ? -stored : stored;
     const double len = norm(vec);
     if (len > 0) add_edge_tensor(tensor.t, vec, beta / len);
   }
+}
+
+// True when sphere_clip_vector turned `edge` into `clipped` with a negative t. MEPP2's
+// sphere_clip_vector has no `t < 0` test (it is commented out there), and its curvature walks
+// take the dihedral angle's sine from the clipped vector (curvature_cmdm.hpp and Manifold/
+// Curvature/curvature.hpp: sine = (n1 x n2) . vec / |vec|), so such an edge adds its tensor with
+// beta negated. t < 0 needs the edge's start outside the sphere, which a walk reaches through an
+// edge shorter than MEPP2's absolute epsilon (kClipEpsilon: "inside" whatever the radius): on
+// meshes of box ~1e-7 (issue 37: blob3 at 1e-7, 0.0491963 without this rule, MEPP2 0.0492054).
+// The short-edge warning (multiscale.cpp) names the cause and the remedy.
+inline bool clipped_backwards(const Vec3& clipped, const Vec3& edge) {
+  return dot(clipped, edge) < 0;
 }
 
 // The curvature tensor of vertex v0 within the ball of radius r (MEPP2's walk, one radius).
@@ -47,12 +64,15 @@ Tensor vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, Curvatur
   const Vec3& o = m.positions[v0];
   const bool strict = variant == CurvatureVariant::kGeneric;
   Tensor tensor;
-  walk_outward(m, v0, strict, scratch, [&](std::uint32_t v, std::uint32_t k, std::uint32_t w,
-                                           Vec3 vec) {
-    const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
-    if (variant == CurvatureVariant::kGeneric || isect) add_edge(m, k, vec, tensor);
-    if (!isect) scratch.enter(w);
-  });
+  walk_outward(m, v0, strict, scratch,
+               [&](std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
+                 const Vec3 edge = vec;
+                 const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
+                 if (variant == CurvatureVariant::kGeneric || isect) {
+                   add_edge(m, k, vec, tensor, clipped_backwards(vec, edge));
+                 }
+                 if (!isect) scratch.enter(w);
+               });
   const double area = kPi * r * r;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) tensor.t[i][j] /= area;
@@ -74,9 +94,12 @@ void vertex_tensors(const HalfedgeMesh& m, std::uint32_t v0, const std::vector<d
   walk_outward_levels(
       m, v0, generic, radii.size(), scratch,
       [&](std::size_t level, std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
+        const Vec3 edge = vec;
         const bool isect = sphere_clip_vector(o, radii[level], m.positions[v], vec);
         if (!isect) scratch.enter(w);
-        if (generic || isect) add_edge(m, k, vec, isect ? crossing : inside);
+        if (generic || isect) {
+          add_edge(m, k, vec, isect ? crossing : inside, clipped_backwards(vec, edge));
+        }
         return isect;
       },
       [&](std::size_t level) {
@@ -142,6 +165,7 @@ bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v) {
   const Vec3 w = sub(p, o);
   const double a = dot(v, v);
   if (std::fabs(a) < kClipEpsilon) return false;
+  if (far_end_clearly_inside(w, v, a, r)) return false;  // what t >= 1 below returns
   const double b = 2.0 * dot(v, w);
   const double c = dot(w, w) - r * r;
   const double delta = b * b - 4. * a * c;

@@ -54,10 +54,12 @@ Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
   return s;
 }
 
-void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, double sigma,
-                 bool with_color, NeighbourhoodSamples& out) {
-  out.w1.push_back(gaussian_weight(distance(s.point1, center1), sigma));
-  out.w2.push_back(gaussian_weight(distance(s.point2, center2), sigma));
+// w1 and w2 hold the samples' distances until the walk is done; to_weights turns them into the
+// Gaussian weights of one level in a vectorised pass.
+void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, bool with_color,
+                 NeighbourhoodSamples& out) {
+  out.w1.push_back(distance(s.point1, center1));
+  out.w2.push_back(distance(s.point2, center2));
   out.curv1.push_back(s.curv1);
   out.curv2.push_back(s.curv2);
   if (!with_color) return;
@@ -72,8 +74,7 @@ void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, doub
 // A vertex sample at several levels: the distances, colours, chroma and hue difference do not
 // depend on the level, so they are computed once (the same operations as push_sample).
 void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t first,
-                        std::uint32_t w, const Vec3& center1, const Vec3& center2,
-                        const std::vector<WalkParameters>& walks, bool with_color,
+                        std::uint32_t w, const Vec3& center1, const Vec3& center2, bool with_color,
                         std::vector<NeighbourhoodSamples>& out) {
   const MatchedFields& f = levels.front();
   const double d1 = distance(f.mesh->positions[w], center1);
@@ -89,8 +90,8 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
   }
   for (std::size_t j = first; j < levels.size(); ++j) {
     NeighbourhoodSamples& o = out[j];
-    o.w1.push_back(gaussian_weight(d1, walks[j].sigma));
-    o.w2.push_back(gaussian_weight(d2, walks[j].sigma));
+    o.w1.push_back(d1);
+    o.w2.push_back(d2);
     o.curv1.push_back((*levels[j].curvature)[w]);
     o.curv2.push_back((*levels[j].curvature_match)[w]);
     if (!with_color) continue;
@@ -102,11 +103,17 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
   }
 }
 
+void to_weights(NeighbourhoodSamples& out, double sigma) {
+  gaussian_weights_in_place(out.w1.data(), out.w1.size(), sigma);
+  gaussian_weights_in_place(out.w2.data(), out.w2.size(), sigma);
+}
+
 }  // namespace
 
 bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v) {
   const Vec3 w = sub(p, o);
   const double a = dot(v, v);
+  if (far_end_clearly_inside(w, v, a, r)) return false;  // what t >= 1 below returns
   const double b = 2.0 * dot(v, w);
   const double c = dot(w, w) - r * r;
   const double delta = b * b - 4 * a * c;
@@ -127,7 +134,7 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
   const Vec3& o = m.positions[v0];
   const Vec3& q0 = (*f.matched_point)[v0];
   out.clear();
-  push_sample(vertex_sample(f, v0), o, q0, walk.sigma, with_color, out);
+  push_sample(vertex_sample(f, v0), o, q0, with_color, out);
   walk_outward(m, v0, walk.strict_outward_test, scratch,
                [&](std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
                  Vec3 vec = edge;
@@ -137,8 +144,9 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
                  const Sample s = (isect && dot(edge, edge) != 0)
                                       ? crossing_sample(f, v, w, vec, edge)
                                       : vertex_sample(f, w);
-                 push_sample(s, o, q0, walk.sigma, with_color, out);
+                 push_sample(s, o, q0, with_color, out);
                });
+  to_weights(out, walk.sigma);
 }
 
 void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32_t v0,
@@ -152,23 +160,24 @@ void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32
   const Vec3& q0 = (*f.matched_point)[v0];
   out.resize(levels.size());
   for (NeighbourhoodSamples& s : out) s.clear();
-  push_vertex_levels(levels, 0, v0, o, q0, walks, with_color, out);
+  push_vertex_levels(levels, 0, v0, o, q0, with_color, out);
   walk_outward_levels(
       m, v0, strict, levels.size(), scratch,
       [&](std::size_t level, std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
         Vec3 vec = edge;
         if (!sphere_clip_vector_cmdm(o, walks[level].radius, m.positions[v], vec)) {
-          if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, walks, with_color, out);
+          if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, with_color, out);
           return false;
         }
         // A crossing: a sample at this level only (a zero-length edge gives w's vertex sample).
         const MatchedFields& here = levels[level];
         const Sample s = dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, edge)
                                               : vertex_sample(here, w);
-        push_sample(s, o, q0, walks[level].sigma, with_color, out[level]);
+        push_sample(s, o, q0, with_color, out[level]);
         return true;
       },
       [](std::size_t) {});
+  for (std::size_t j = 0; j < out.size(); ++j) to_weights(out[j], walks[j].sigma);
 }
 
 }  // namespace qm3d::mesh::detail

@@ -364,14 +364,16 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
     v->resize(n);
   }
   const bool i_is_point = d.correspondence_is_point[i] != 0;
+  // Distances first, then the weights in one vectorised pass per side; w2 is w1 wherever both
+  // correspondences are the points themselves (the same distance, so the same weight).
+  bool w2_is_w1 = i_is_point;
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t j = s.within[k].index;
-    const double w1 = gaussian_weight(std::sqrt(s.within[k].distance2), radii.sigma);
-    out.w1[k] = w1;
-    out.w2[k] = i_is_point && d.correspondence_is_point[j] != 0
-                    ? w1
-                    : gaussian_weight(point_distance(d.correspondence[i], d.correspondence[j]),
-                                      radii.sigma);
+    const double d1 = std::sqrt(s.within[k].distance2);
+    const bool same = i_is_point && d.correspondence_is_point[j] != 0;
+    w2_is_w1 = w2_is_w1 && same;
+    out.w1[k] = d1;
+    out.w2[k] = same ? d1 : point_distance(d.correspondence[i], d.correspondence[j]);
     out.curv1[k] = d.curvature_iterated[j];
     out.curv2[k] = d.curvature_other[j];
     out.light1[k] = d.lightness_iterated[j];
@@ -379,6 +381,12 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
     out.chroma1[k] = d.chroma_iterated[j];
     out.chroma2[k] = d.chroma_other[j];
     out.hue_diff[k] = d.hue_difference[j];
+  }
+  gaussian_weights_in_place(out.w1.data(), n, radii.sigma);
+  if (w2_is_w1) {
+    out.w2 = out.w1;
+  } else {
+    gaussian_weights_in_place(out.w2.data(), n, radii.sigma);
   }
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace qm3d {
@@ -15,6 +16,14 @@ inline double gaussian_weight(double distance, double sigma) {
   return 1.0 / sigma / std::sqrt(2 * 3.141592) *
          std::exp(-(distance * distance) / 2.0 / sigma / sigma);
 }
+
+/// gaussian_weight(values[i], sigma) for each i, in place: values are distances on entry,
+/// weights on return. The exponent and the scaling are the very operations of gaussian_weight;
+/// the exponential is glibc's vector exp (libmvec, 4 lanes with AVX2) where the machine has it,
+/// which differs from std::exp by at most 4 ulp (CMDM and PCQM scores by about 1e-16 relative)
+/// and gives each element the same value wherever it stands in the array and whatever n is.
+/// Elsewhere (no AVX2, no libmvec) it is std::exp, and gaussian_weight's value exactly.
+void gaussian_weights_in_place(double* values, std::size_t n, double sigma);
 
 /// Which weights the cross term sigma_12 uses, and how it is normalised.
 enum class CovarianceWeighting {
