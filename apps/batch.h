@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "commands.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 #include "shard.h"
 
 namespace CLI {

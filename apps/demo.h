@@ -5,7 +5,7 @@
 #include <ostream>
 
 #include "commands.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 
 namespace qm3d::app {
 

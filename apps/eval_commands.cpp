@@ -8,16 +8,16 @@
 #include <set>
 #include <sstream>
 
-#include "eval_plot.h"
+#include "qm3d/report/eval_plot.h"
 #include "eval_protocol.h"
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation.h"
-#include "qm3d/common/evaluation_io.h"
+#include "qm3d/evaluation/evaluation.h"
+#include "qm3d/evaluation/evaluation_io.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "commands.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 #include "train_command.h"
 
 namespace qm3d::app {

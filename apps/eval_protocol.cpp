@@ -13,13 +13,13 @@
 #include <sstream>
 
 #include "commands.h"
-#include "eval_plot.h"
+#include "qm3d/report/eval_plot.h"
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation_protocol.h"
+#include "qm3d/evaluation/evaluation_protocol.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
 namespace {

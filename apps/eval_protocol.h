@@ -1,10 +1,10 @@
 // `qm3d eval` on several metrics, or with Krasula's analysis: reads the score columns, the
 // subjective data (MOS, CI, SD and n, raw scores or labelled pairs) and prints what
-// qm3d::evaluate_metrics() computes (common/include/qm3d/common/evaluation_protocol.h).
+// qm3d::evaluate_metrics() computes (evaluation/include/qm3d/evaluation/evaluation_protocol.h).
 #pragma once
 
 #include "eval_commands.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
 

@@ -13,7 +13,7 @@
 #include "demo.h"
 #include "eval_commands.h"
 #include "help_format.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 #include "image_command.h"
 #include "merge_command.h"
 #include "metric_cli.h"

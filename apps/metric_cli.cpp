@@ -4,7 +4,7 @@
 #include <set>
 #include <sstream>
 
-#include "qm3d/common/model_io.h"
+#include "qm3d/evaluation/model_io.h"
 
 namespace qm3d::app {
 namespace {

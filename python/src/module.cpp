@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation.h"
-#include "qm3d/common/evaluation_io.h"
-#include "qm3d/common/evaluation_protocol.h"
+#include "qm3d/evaluation/evaluation.h"
+#include "qm3d/evaluation/evaluation_io.h"
+#include "qm3d/evaluation/evaluation_protocol.h"
 #include "qm3d/common/metric.h"
-#include "qm3d/common/model_io.h"
+#include "qm3d/evaluation/model_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/mesh_io.h"

@@ -14,7 +14,7 @@
 #include <set>
 #include <sstream>
 
-#include "qm3d/common/evaluation.h"
+#include "qm3d/evaluation/evaluation.h"
 #include "qm3d/common/pooling.h"
 #include "cli_runner.h"
 #include "test_paths.h"
