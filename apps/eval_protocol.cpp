@@ -16,20 +16,22 @@
 #include "qm3d/report/eval_plot.h"
 #include "qm3d/common/error.h"
 #include "qm3d/evaluation/evaluation_protocol.h"
+#include "qm3d/evaluation/orientation.h"
+#include "qm3d/evaluation/pair_labels.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
 namespace fs = std::filesystem;
 
 constexpr double kConfidence = 0.95;
-/// z of a two-sided 95 % normal interval: CI half-width = 1.96 SD / sqrt(n).
-constexpr double kZ95 = 1.959963984540054;
 
 std::vector<std::string> split_list(const std::string& s) {
   std::vector<std::string> out;
@@ -95,36 +97,15 @@ std::vector<std::size_t> numeric_columns(const CsvTable& t, std::size_t key) {
   return out;
 }
 
-// The orientation of a series: --lower-is-better, --orientation, the registered metric its rows
-// name (asked about the column), a column named after a registered metric or one of its named
-// values; else assumed higher = better (Krasula's convention), and said so.
-void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
-  const auto& lower = o.lower_is_better;
-  if (std::find(lower.begin(), lower.end(), s.name) != lower.end()) {
-    m.higher_is_better = false;
-    m.orientation_source = "--lower-is-better";
-    return;
-  }
-  if (o.orientation != "auto") {
-    m.higher_is_better = o.orientation == "quality";
-    m.orientation_source = "--orientation";
-    return;
-  }
-  const std::string& column = s.table->header[s.column];
-  if (const MetricSpec* spec = s.metric.empty() ? nullptr : registry().find(s.metric)) {
-    if (const auto h = spec->column_higher_is_better(column)) {
-      m.higher_is_better = *h;
-      m.orientation_source = "metric column: " + s.metric;
-      return;
-    }
-  }
-  if (const auto h = registry().column_orientation(column)) {
-    m.higher_is_better = h->first;
-    m.orientation_source = h->second;
-    return;
-  }
-  m.higher_is_better = true;
-  m.orientation_source = "assumed: not a registered metric";
+// The orientation of a series (qm3d::evaluation::orient): --lower-is-better, --orientation, the
+// registered metric its rows name (asked about the column), a column named after a registered
+// metric or one of its named values; else assumed higher = better (Krasula's convention).
+void orient_series(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
+  const Orientation r =
+      orient(default_registry(), {o.lower_is_better, o.orientation},
+             {s.name, s.metric, s.table->header[s.column]}, Fallback::column_name_then_quality);
+  m.higher_is_better = *r.higher_is_better;
+  m.orientation_source = r.source;
 }
 
 // Every --lower-is-better name must be one of the series (a typo is refused, never ignored).
@@ -183,7 +164,7 @@ PairLabels pairs_from_sd(const CsvTable& mos, std::size_t mos_column, const Stim
       n.push_back(required_number(mos, row, *n_c, "observer count"));
     } else {
       const double ci = required_number(mos, row, *ci_c, "confidence interval");
-      n.push_back(ci > 0 ? std::pow(kZ95 * sd.back() / ci, 2) : 0.0);
+      n.push_back(observers_from_ci(sd.back(), ci));
     }
     const std::string where = mos.path + ":" + std::to_string(mos.line_numbers[row]);
     if (sd.back() < 0) throw FormatError(where + ": a negative standard deviation");
@@ -192,7 +173,11 @@ PairLabels pairs_from_sd(const CsvTable& mos, std::size_t mos_column, const Stim
                         " observers; Krasula's labels need n >= 2");
     }
   }
-  return label_pairs_j149(m, sd, n, groups);
+  PairLabelSource source;
+  source.kind = PairLabelSource::Kind::sd;
+  source.sd = std::move(sd);
+  source.n = std::move(n);
+  return *label_pairs(m, source, groups);
 }
 
 // Labels from a long-format file of individual scores: stimulus, observer, score (by name or
@@ -226,7 +211,10 @@ PairLabels pairs_from_raw(const EvalCommandOptions& o, const Stimuli& st,
                         std::to_string(scores[i].size()) + " individual scores; at least 2 needed");
     }
   }
-  return label_pairs_raw(scores, groups);
+  PairLabelSource source;
+  source.kind = PairLabelSource::Kind::raw;
+  source.raw = std::move(scores);
+  return *label_pairs({}, source, groups);
 }
 
 // Given labels: first, second, label (+1 first better, -1 worse, 0 similar).
@@ -666,7 +654,7 @@ int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool 
     MetricScores m;
     m.name = series[s].name;
     for (const std::string& k : st.keys) m.scores.push_back(values[s].at(k));
-    orient(series[s], o, m);
+    orient_series(series[s], o, m);
     names.push_back(m.name);
     metrics.push_back(std::move(m));
   }

@@ -26,6 +26,7 @@
 #include "sample_commands.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
 // Exit codes (README "Exit codes").
@@ -99,7 +100,7 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
   } else if (o.csv) {
     std::vector<const MetricSpec*> specs;
     for (const auto& r : results) {
-      if (const MetricSpec* s = registry().find(r.metric)) specs.push_back(s);
+      if (const MetricSpec* s = default_registry().find(r.metric)) specs.push_back(s);
     }
     const std::vector<std::string> values = csv_value_names(specs);
     out << csv_header(values) << "\n";
@@ -160,9 +161,9 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   check_score_outputs(cli, c.report);
   request.keep_per_element = report.has_value();
   const Input ref =
-      registry().read(cli.ref, read_options(cli.colour_scale, cli.ref_texture, "--ref-texture"));
+      default_registry().read(cli.ref, read_options(cli.colour_scale, cli.ref_texture, "--ref-texture"));
   const Input dist =
-      registry().read(cli.dist, read_options(cli.colour_scale, cli.dist_texture, "--dist-texture"));
+      default_registry().read(cli.dist, read_options(cli.colour_scale, cli.dist_texture, "--dist-texture"));
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
   std::vector<MetricResult> results;
   const bool show = !g.quiet && (cli.progress || stderr_is_terminal());
@@ -185,7 +186,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
 // "qm3d 0.1.0 (commit ...)" and the reference tool each metric reproduces.
 std::string version_text() {
   std::string text = std::string("qm3d ") + kVersion + " (commit " + git_commit() + ")";
-  for (const MetricSpec& spec : registry().metrics()) {
+  for (const MetricSpec& spec : default_registry().metrics()) {
     text += "\n  " + spec.name + ": " +
             (spec.reproduces.empty() ? "qm3d's own definition (no reference implementation)"
                                      : "reproduces " + spec.reproduces);
@@ -197,7 +198,7 @@ std::string version_text() {
 // registry's orientation of each metric.
 std::string orientation_line() {
   std::string distortions, qualities;
-  for (const MetricSpec& spec : registry().metrics()) {
+  for (const MetricSpec& spec : default_registry().metrics()) {
     std::string& list = spec.higher_is_better ? qualities : distortions;
     list += (list.empty() ? "" : ", ") + spec.title;
   }
@@ -228,7 +229,7 @@ int run(int argc, char** argv) {
 
   // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
   std::vector<ScoreCommand> score_commands;
-  for (const MetricSpec& spec : registry().metrics()) {
+  for (const MetricSpec& spec : default_registry().metrics()) {
     score_commands.push_back({&spec, app.add_subcommand(spec.name, spec.summary)});
   }
   score_commands.push_back(
@@ -266,7 +267,7 @@ int run(int argc, char** argv) {
   MetricOptionsCli batch_options;
   std::string list, results;
   std::string metric_names;
-  for (const auto& m : registry().metrics()) metric_names += m.name + ", ";
+  for (const auto& m : default_registry().metrics()) metric_names += m.name + ", ";
   auto* batch_cmd = app.add_subcommand(
       "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = " +
                    metric_names +

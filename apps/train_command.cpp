@@ -17,6 +17,7 @@
 #include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 using ordered_json = nlohmann::ordered_json;

@@ -15,7 +15,7 @@
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/statistics.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -447,4 +447,4 @@ EvaluationResult evaluate_scores(const std::vector<double>& scores, const std::v
   return r;
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
@@ -38,4 +38,4 @@ ordered_json logistic_json(const LogisticFit& fit) {
           {"bounded", fit.bounded}};
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -5,7 +5,7 @@
 
 #include "qm3d/evaluation/evaluation_io.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
@@ -151,4 +151,4 @@ ordered_json evaluate_metrics(const std::vector<MetricScores>& metrics,
   return protocol_json(metrics, subjective, run_protocol(metrics, subjective, options));
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -15,7 +15,7 @@
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/evaluation/p1401.h"  // two_sided_normal_p
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -631,4 +631,4 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
   return analyse(k, pairs.label, blocks);
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

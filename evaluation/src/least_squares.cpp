@@ -3,7 +3,7 @@
 #include <cmath>
 #include <unsupported/Eigen/NonLinearOptimization>
 
-namespace qm3d::detail {
+namespace qm3d::evaluation::detail {
 namespace {
 
 // The functor interface Eigen::LevenbergMarquardt expects (operator(), df, values, inputs).
@@ -75,4 +75,4 @@ double logistic_sigmoid(double z) {
   return e / (1.0 + e);
 }
 
-}  // namespace qm3d::detail
+}  // namespace qm3d::evaluation::detail

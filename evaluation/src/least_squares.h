@@ -7,7 +7,7 @@
 #include <cmath>
 #include <functional>
 
-namespace qm3d::detail {
+namespace qm3d::evaluation::detail {
 
 /// r(x): #residuals values; J(x): #residuals by #parameters, J(i, k) = d r_i / d x_k.
 struct LeastSquaresProblem {
@@ -56,4 +56,4 @@ inline bool logistic_admissible(double beta1, double beta2, double scale) {
 /// sigma(z) = 1 / (1 + exp(-z)), without overflow for large |z|.
 double logistic_sigmoid(double z);
 
-}  // namespace qm3d::detail
+}  // namespace qm3d::evaluation::detail

@@ -9,7 +9,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 using nlohmann::json;
@@ -162,4 +162,4 @@ void write_model(const std::filesystem::path& path, const ModelFile& model) {
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

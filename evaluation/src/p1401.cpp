@@ -13,7 +13,7 @@
 #include "qm3d/common/pooling.h"
 #include "qm3d/common/statistics.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -787,4 +787,4 @@ double student_t_quantile(double p, double dof) {
   return (p < 0.5 ? -0.5 : 0.5) * (lo + hi);
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -11,7 +11,7 @@
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/table_text.h"
 
-namespace qm3d::app {
+namespace qm3d::evaluation {
 namespace {
 
 /// The stimulus column of `qm3d batch` results.
@@ -183,4 +183,4 @@ JoinedRows join_on_key(const CsvTable& left, std::size_t left_key, const CsvTabl
   return j;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::evaluation

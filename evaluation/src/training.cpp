@@ -14,7 +14,7 @@
 #include "qm3d/common/statistics.h"
 #include "qm3d/evaluation/model_io.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 namespace {
 
 /// Fewest stimuli in a held-out group: a correlation over fewer says nothing.
@@ -427,4 +427,4 @@ TrainingResult train_linear_model(const TrainingSet& data, const TrainingOptions
   return result;
 }
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

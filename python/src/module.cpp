@@ -19,6 +19,8 @@
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/evaluation/evaluation_io.h"
 #include "qm3d/evaluation/evaluation_protocol.h"
+#include "qm3d/evaluation/orientation.h"
+#include "qm3d/evaluation/pair_labels.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/evaluation/model_io.h"
 #include "qm3d/common/result_io.h"
@@ -28,23 +30,16 @@
 #include "qm3d/pointcloud/metrics.h"
 #include "qm3d/render/ibsm.h"
 #include "qm3d/render/icid.h"
+#include "qm3d/scoring/registry.h"
 #include "interruptible_call.h"
 
 namespace py = pybind11;
 
 namespace qm3d::python {
 namespace {
+using namespace qm3d::evaluation;  // the evaluation toolkit (qm3d/evaluation/)
 
-const Registry& registry() {
-  static const Registry r = [] {
-    Registry reg;
-    mesh::register_metrics(reg);
-    pointcloud::register_metrics(reg);
-    render::register_metrics(reg);
-    return reg;
-  }();
-  return r;
-}
+using scoring::default_registry;
 
 [[noreturn]] void bad_argument(const std::string& argument, const std::string& what) {
   throw py::value_error(argument + ": " + what);
@@ -220,7 +215,7 @@ struct RunArguments {
 
 MetricResult run(const std::string& metric, const Input& reference, const Input& distorted,
                  const RunArguments& a) {
-  const MetricSpec& spec = registry().get(metric);
+  const MetricSpec& spec = default_registry().get(metric);
   RunOptions run;
   if (a.direction) run.direction = parse_direction(*a.direction);
   if (a.threads < 0) throw py::value_error("threads: must be 0 (all cores) or more");
@@ -308,7 +303,7 @@ PYBIND11_MODULE(_qm3d, m) {
 
   m.def("metrics", [] {
     py::list out;
-    for (const MetricSpec& s : registry().metrics()) out.append(spec_dict(s));
+    for (const MetricSpec& s : default_registry().metrics()) out.append(spec_dict(s));
     return out;
   });
 
@@ -321,7 +316,7 @@ PYBIND11_MODULE(_qm3d, m) {
             o.colour_scale = parse_colour_scale(colour_scale);  // ValueError otherwise
             o.texture = texture;
             o.texture_option = texture_option;
-            return registry().read(path, o);
+            return default_registry().read(path, o);
           },
           py::arg("path"), py::arg("colour_scale") = "auto", py::arg("texture") = "",
           py::arg("texture_option") = "ref_texture= / dist_texture=")
@@ -352,7 +347,7 @@ PYBIND11_MODULE(_qm3d, m) {
 
   m.def("applicable", [](const Input& ref, const Input& dist) {
     std::vector<std::string> names;
-    for (const MetricSpec* s : registry().applicable(ref, dist)) names.push_back(s->name);
+    for (const MetricSpec* s : default_registry().applicable(ref, dist)) names.push_back(s->name);
     return names;
   });
 
@@ -400,7 +395,7 @@ PYBIND11_MODULE(_qm3d, m) {
   m.def("csv_header", &csv_header, py::arg("value_names") = std::vector<std::string>{});
   m.def("csv_value_names", [] {
     std::vector<const MetricSpec*> all;
-    for (const MetricSpec& s : registry().metrics()) all.push_back(&s);
+    for (const MetricSpec& s : default_registry().metrics()) all.push_back(&s);
     return csv_value_names(all);
   });
 
@@ -426,7 +421,7 @@ PYBIND11_MODULE(_qm3d, m) {
         ColoredCloud c;
         {
           py::gil_scoped_release release;
-          c = registry().sampler()(mesh, SurfaceSampling{points, density, seed});
+          c = default_registry().sampler()(mesh, SurfaceSampling{points, density, seed});
         }
         return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors));
       },
@@ -452,7 +447,7 @@ PYBIND11_MODULE(_qm3d, m) {
         GridSamples g;
         {
           py::gil_scoped_release release;
-          g = registry().grid_sampler()(mesh, o);
+          g = default_registry().grid_sampler()(mesh, o);
         }
         std::vector<Vec3> p(g.positions.size()), n(g.normals.size());
         for (std::size_t i = 0; i < p.size(); ++i) {
@@ -477,7 +472,7 @@ PYBIND11_MODULE(_qm3d, m) {
       "render_views",
       [](const Input& input, const std::string& options_json, std::optional<std::vector<double>> frame,
          int threads) {
-        const MetricSpec& spec = registry().get("ibsm");
+        const MetricSpec& spec = default_registry().get("ibsm");
         const render::IbsmOptions o =
             render::ibsm_options(spec.complete(nlohmann::json::parse(options_json)));
         std::vector<render::View> views;
@@ -600,34 +595,25 @@ PYBIND11_MODULE(_qm3d, m) {
          const std::vector<std::size_t>& second, const std::vector<int>& label,
          const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed,
          const std::string& mapping) {
+        const OrientationRequest request{lower_is_better, orientation, "lower_is_better",
+                                         "orientation"};
         std::vector<MetricScores> metrics;
         for (std::size_t i = 0; i < names.size(); ++i) {
-          MetricScores ms{names[i], scores.at(i), true, ""};
-          const auto& lower = lower_is_better;
-          const auto known = registry().column_orientation(names[i]);
-          if (std::find(lower.begin(), lower.end(), names[i]) != lower.end()) {
-            ms.higher_is_better = false;
-            ms.orientation_source = "lower_is_better";
-          } else if (orientation != "auto") {
-            ms.higher_is_better = orientation == "quality";
-            ms.orientation_source = "orientation";
-          } else if (known) {
-            ms.higher_is_better = known->first;
-            ms.orientation_source = known->second;
-          } else {
-            ms.orientation_source = "assumed: not a registered metric";
-          }
-          metrics.push_back(std::move(ms));
+          const Orientation r = orient(default_registry(), request, {names[i], "", names[i]},
+                                       Fallback::column_name_then_quality);
+          metrics.push_back({names[i], scores.at(i), *r.higher_is_better, r.source});
         }
-        SubjectiveData subjective{mos, ci95, std::nullopt};
-        if (labels == "sd") subjective.pairs = label_pairs_j149(mos, sd, n, groups);
-        if (labels == "raw") subjective.pairs = label_pairs_raw(raw, groups);
+        PairLabelSource source;
+        if (labels == "sd") source = {PairLabelSource::Kind::sd, sd, n, {}, {}};
+        if (labels == "raw") source = {PairLabelSource::Kind::raw, {}, {}, raw, {}};
         if (labels == "pairs") {
-          PairLabels p;
-          p.rule = "given";
-          for (std::size_t k = 0; k < label.size(); ++k) p.add(first.at(k), second.at(k), label[k]);
-          subjective.pairs = std::move(p);
+          source.kind = PairLabelSource::Kind::given;
+          source.given.rule = "given";
+          for (std::size_t k = 0; k < label.size(); ++k) {
+            source.given.add(first.at(k), second.at(k), label[k]);
+          }
         }
+        const SubjectiveData subjective{mos, ci95, label_pairs(mos, source, groups)};
         ProtocolOptions o;
         o.evaluation.bootstrap = bootstrap;
         o.evaluation.seed = seed;

@@ -9,7 +9,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -197,4 +197,4 @@ void write_scatter_plot(const fs::path& path, const ScatterPlot& plot) {
   write_canvas(path, scatter_canvas(plot));
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

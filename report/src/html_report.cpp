@@ -30,7 +30,7 @@
 #error "the report's binary blobs are written in host order, which must be little-endian"
 #endif
 
-namespace qm3d::app {
+namespace qm3d::report {
 namespace {
 
 using nlohmann::json;
@@ -800,4 +800,4 @@ std::vector<std::uint32_t> display_subset(std::size_t n, std::size_t budget) {
   return kept;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

@@ -3,7 +3,7 @@
 
 #include <string>
 
-namespace qm3d::app {
+namespace qm3d::report {
 
 /// `s` with & < > " ' replaced by character references: safe as element text and inside quoted
 /// attribute values, in HTML and in XML.
@@ -23,4 +23,4 @@ inline std::string markup_escaped(const std::string& s) {
   return out;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

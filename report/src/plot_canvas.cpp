@@ -15,7 +15,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 namespace {
 
 /// stb_easy_font's glyphs: capitals are 7 units tall from the top of the line; a 13 px SVG font
@@ -227,4 +227,4 @@ void write_canvas(const std::filesystem::path& path, const Canvas& c) {
   write_file_atomically(path, [&](std::ostream& out) { out << bytes; });
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

@@ -21,6 +21,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the evaluation toolkit (qm3d/evaluation/)
 
 namespace fs = std::filesystem;
 using test::CliRun;

@@ -15,7 +15,7 @@
 
 #include "qm3d/common/error.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -299,4 +299,4 @@ TEST(HtmlReport, IndexOrdersAQualityLowestFirst) {
 }
 
 }  // namespace
-}  // namespace qm3d::app
+}  // namespace qm3d::report

@@ -10,6 +10,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 // Portable uniform double in [0, 1) from a standard-specified engine.
 double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }

@@ -17,6 +17,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 // ---- the pair-list formulation, as it was (the oracle) ----------------------------------------
 

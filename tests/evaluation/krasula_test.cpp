@@ -16,6 +16,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 // A CSV of the reference folder as rows of named cells (a quoted field may hold commas).
 using Row = std::map<std::string, std::string>;

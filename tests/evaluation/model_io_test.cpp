@@ -11,6 +11,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 namespace fs = std::filesystem;
 

@@ -17,6 +17,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 

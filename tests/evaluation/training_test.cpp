@@ -9,6 +9,7 @@
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the toolkit under test (qm3d/evaluation/)
 
 double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <string_view>
 
-namespace qm3d::app {
+namespace qm3d {
 
 /// `text` without a leading UTF-8 byte-order mark (spreadsheets write one before the header).
 inline std::string_view without_utf8_bom(std::string_view text) {
@@ -19,4 +19,4 @@ inline std::string lower_ascii(std::string s) {
   return s;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d

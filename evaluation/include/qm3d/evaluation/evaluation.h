@@ -13,7 +13,7 @@
 #include <optional>
 #include <vector>
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// Pearson linear correlation coefficient; sums in element order. NaN when there are fewer
 /// than 2 pairs or one variable is constant.
@@ -141,4 +141,4 @@ EvaluationResult evaluate_scores(const std::vector<double>& scores, const std::v
                                  const std::vector<double>& mos_ci95 = {},
                                  const EvaluationOptions& options = {});
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -9,7 +9,7 @@
 
 #include "qm3d/evaluation/evaluation.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// The statistics in their output order, with their names: plcc, srocc, krocc, plcc_logistic,
 /// rmse_logistic[, outlier_ratio].
@@ -21,4 +21,4 @@ nlohmann::ordered_json statistic_json(const Statistic& s);
 /// The fitted logistic mapping: its formula, beta1..beta4, rmse, converged, bounded.
 nlohmann::ordered_json logistic_json(const LogisticFit& fit);
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -13,7 +13,7 @@
 #include "qm3d/evaluation/krasula.h"
 #include "qm3d/evaluation/p1401.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// One metric's scores on the stimuli (aligned with SubjectiveData).
 struct MetricScores {
@@ -72,4 +72,4 @@ nlohmann::ordered_json evaluate_metrics(const std::vector<MetricScores>& metrics
                                         const SubjectiveData& subjective,
                                         const ProtocolOptions& options = {});
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -11,8 +11,9 @@
 // @ f85a853) compute them; the conventions are in ../shared/data/reference/evaluation/README.md.
 //
 // Example:
-//   const qm3d::PairLabels pairs = qm3d::label_pairs_j149(mos, sd, n);
-//   const qm3d::KrasulaResult r = qm3d::krasula_analysis({psnr, ssim}, pairs);
+//   const qm3d::evaluation::PairLabels pairs = qm3d::evaluation::label_pairs_j149(mos, sd, n);
+//   const qm3d::evaluation::KrasulaResult r =
+//       qm3d::evaluation::krasula_analysis({psnr, ssim}, pairs);
 //   // r.metrics[1].auc_bw, r.comparisons[0].p_delong_bw ...
 #pragma once
 
@@ -21,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// Pairs of stimuli with their subjective outcome: label +1 = the first stimulus is
 /// significantly better than the second, -1 = significantly worse, 0 = not significantly
@@ -151,4 +152,4 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differenc
 KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
                                const PairLabels& pairs);
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -26,7 +26,7 @@
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/common/pooling.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// The "format" value written by write_model.
 inline constexpr const char* kModelFormat = "qm3d-model/1";
@@ -64,4 +64,4 @@ std::size_t feature_index(const std::string& name);
 /// 0..7 -> "f1".."f8".
 std::string feature_name(std::size_t index);
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -25,7 +25,7 @@
 
 #include "qm3d/evaluation/evaluation.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 // ---- mappings (P.1401 §7.3.3, Appendices I and II) ------------------------------------------
 
@@ -251,4 +251,4 @@ double student_t_sf(double t, double dof);
 /// The p-quantile of Student's t (scipy's t.ppf), by bisection on student_t_sf.
 double student_t_quantile(double p, double dof);
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

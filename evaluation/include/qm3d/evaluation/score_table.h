@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace qm3d::app {
+namespace qm3d::evaluation {
 
 /// How many keys of a list of unmatched or skipped rows are shown (stderr and JSON).
 inline constexpr std::size_t kKeysShown = 5;
@@ -75,4 +75,4 @@ struct JoinedRows {
 JoinedRows join_on_key(const CsvTable& left, std::size_t left_key, const CsvTable& right,
                        std::size_t right_key, bool by_stem);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::evaluation

@@ -27,7 +27,7 @@
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/common/features.h"
 
-namespace qm3d {
+namespace qm3d::evaluation {
 
 /// A set of features: bit k set = f(k+1) used. 1..255.
 using FeatureMask = unsigned;
@@ -130,4 +130,4 @@ struct TrainingResult {
 /// @throws std::invalid_argument  lengths differ, no grouping, or a subset is not in 1..255
 TrainingResult train_linear_model(const TrainingSet& data, const TrainingOptions& options = {});
 
-}  // namespace qm3d
+}  // namespace qm3d::evaluation

@@ -9,7 +9,7 @@
 
 #include "qm3d/evaluation/evaluation.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 
 struct ScatterPlot {
   std::vector<double> x;   ///< #n scores
@@ -36,4 +36,4 @@ void write_auc_plot(const std::filesystem::path& path, const AucPlot& plot);
 /// @throws InputError  another extension, write errors
 void write_scatter_plot(const std::filesystem::path& path, const ScatterPlot& plot);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

@@ -21,7 +21,7 @@
 #include "qm3d/common/result.h"
 #include "qm3d/common/types.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 
 /// Above this many points (clouds) or faces (meshes) a view is decimated: a cloud keeps every
 /// k-th point, a mesh is shown as (every k-th of) its vertices. The report says so.
@@ -148,4 +148,4 @@ double percentile(const std::vector<double>& values, double p);
 /// (k = ceil(n / budget)), starting at 0.
 std::vector<std::uint32_t> display_subset(std::size_t n, std::size_t budget);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace qm3d::app {
+namespace qm3d::report {
 
 struct Rgb {
   std::uint8_t r = 0, g = 0, b = 0;
@@ -66,4 +66,4 @@ std::string canvas_png(const Canvas& c);
 /// @throws InputError  another extension, or a write error
 void write_canvas(const std::filesystem::path& path, const Canvas& c);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::report
