@@ -393,6 +393,10 @@ PYBIND11_MODULE(_qm3d, m) {
           py::arg("value_names") = std::vector<std::string>{});
 
   m.def("csv_header", &csv_header, py::arg("value_names") = std::vector<std::string>{});
+  // The error row of `qm3d batch` (result_io.h): qm3d.dask makes its rows only through these.
+  m.def("csv_error_row", &csv_error_row, py::arg("reference"), py::arg("distorted"),
+        py::arg("metric"), py::arg("error"),
+        py::arg("value_names") = std::vector<std::string>{});
   m.def("csv_value_names", [] {
     std::vector<const MetricSpec*> all;
     for (const MetricSpec& s : default_registry().metrics()) all.push_back(&s);
