@@ -129,10 +129,11 @@ std::string the_metric(const EvalData& d) {
   return metric;
 }
 
-// The orientation of the score column (qm3d::evaluation::orient): --orientation, else the registered metric every used
-// row of SCORES names in its "metric" column (batch results), asked about that column ("score",
-// "d1_mse", "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe
-// (f1..f8) and for files without a metric column or with several metrics.
+// The orientation of the score column (qm3d::evaluation::orient, Fallback::none):
+// --lower-is-better, --orientation, else the registered metric every used row of SCORES names in
+// its "metric" column (batch results), asked about that column ("score", "d1_mse",
+// "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe (f1..f8) and for
+// files without a metric column or with several metrics.
 void find_orientation(EvalData& d, const EvalCommandOptions& o) {
   // A name that is not the evaluated column (a typo) is refused, never silently ignored.
   const std::string& evaluated = d.scores_table.header[d.scores_value];

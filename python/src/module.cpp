@@ -287,15 +287,9 @@ render::RgbImage rgb_image_of(const py::array_t<std::uint8_t, py::array::c_style
 }
 
 }  // namespace
-}  // namespace qm3d::python
 
-PYBIND11_MODULE(_qm3d, m) {
-  using namespace qm3d;
-  using namespace qm3d::python;
-  m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
-  m.attr("__version__") = kVersion;
-  m.attr("__commit__") = git_commit();
-
+// The typed errors and the registry's metrics.
+void bind_errors_and_metrics(py::module_& m) {
   // Typed errors: a file that cannot be read is an OSError, bad content a ValueError.
   py::register_exception<InputError>(m, "InputError", PyExc_OSError);
   py::register_exception<FormatError>(m, "FormatError", PyExc_ValueError);
@@ -306,7 +300,10 @@ PYBIND11_MODULE(_qm3d, m) {
     for (const MetricSpec& s : default_registry().metrics()) out.append(spec_dict(s));
     return out;
   });
+}
 
+// Inputs: read by content or built from arrays, and the metrics that apply.
+void bind_inputs(py::module_& m) {
   py::class_<Input>(m, "Input")
       .def_static(
           "from_file",
@@ -350,7 +347,10 @@ PYBIND11_MODULE(_qm3d, m) {
     for (const MetricSpec* s : default_registry().applicable(ref, dist)) names.push_back(s->name);
     return names;
   });
+}
 
+// Results and the rows of `qm3d batch`.
+void bind_results(py::module_& m) {
   py::class_<DirectionResult>(m, "DirectionResult")
       .def_readonly("score", &DirectionResult::score)
       .def_readonly("box_size", &DirectionResult::box_size)
@@ -402,7 +402,10 @@ PYBIND11_MODULE(_qm3d, m) {
     for (const MetricSpec& s : default_registry().metrics()) all.push_back(&s);
     return csv_value_names(all);
   });
+}
 
+// Running a metric, and the calls Ctrl-C left running.
+void bind_scoring(py::module_& m) {
   m.def(
       "run",
       [](const std::string& metric, const Input& reference, const Input& distorted,
@@ -419,6 +422,17 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("weights"), py::arg("model_path"), py::arg("progress"),
       py::arg("release_inputs") = false);
 
+
+  // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
+  // finish their current stage on their own threads; they must be gone before Python is.
+  m.def("wait_for_interrupted_calls", [] {
+    py::gil_scoped_release release;
+    AbandonedWorkers::instance().wait_all();
+  });
+}
+
+// Surface and grid sampling.
+void bind_sampling(py::module_& m) {
   m.def(
       "sample",
       [](const Input& mesh, std::size_t points, double density, std::uint64_t seed) {
@@ -471,7 +485,10 @@ PYBIND11_MODULE(_qm3d, m) {
       },
       py::arg("mesh"), py::arg("grid_size"), py::arg("box"), py::arg("all_axes"),
       py::arg("bilinear"));
+}
 
+// The rendered views of IBSM.
+void bind_render_views(py::module_& m) {
   m.def(
       "render_views",
       [](const Input& input, const std::string& options_json, std::optional<std::vector<double>> frame,
@@ -520,7 +537,10 @@ PYBIND11_MODULE(_qm3d, m) {
         return py::make_tuple(out, std::vector<float>(f.center.begin(), f.center.end()), f.radius);
       },
       py::arg("input"), py::arg("options_json"), py::arg("frame"), py::arg("threads"));
+}
 
+// Image quality of two images (iCID, SSIM).
+void bind_image_quality(py::module_& m) {
   m.def(
       "image_quality",
       [](const py::array_t<std::uint8_t, py::array::c_style>& a,
@@ -564,7 +584,10 @@ PYBIND11_MODULE(_qm3d, m) {
       },
       py::arg("a"), py::arg("b"), py::arg("intent"), py::arg("iam"), py::arg("omit_maps67"),
       py::arg("downsampling"), py::arg("keep_map"), py::arg("threads"), py::arg("data_dir"));
+}
 
+// Agreement of one metric's scores with subjective scores.
+void bind_evaluation(py::module_& m) {
   m.def(
       "evaluate",
       [](const std::vector<double>& scores, const std::vector<double>& mos,
@@ -588,7 +611,10 @@ PYBIND11_MODULE(_qm3d, m) {
         return j.dump();
       },
       py::arg("scores"), py::arg("mos"), py::arg("ci95"), py::arg("bootstrap"), py::arg("seed"));
+}
 
+// Several metrics on one set of stimuli (the protocol, Krasula's pairs), and model files.
+void bind_evaluate_metrics(py::module_& m) {
   m.def(
       "evaluate_metrics",
       [](const std::vector<std::string>& names, const std::vector<std::vector<double>>& scores,
@@ -634,13 +660,25 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("raw"), py::arg("first"), py::arg("second"), py::arg("label"), py::arg("groups"),
       py::arg("bootstrap"), py::arg("seed"), py::arg("mapping") = "logistic4");
 
-  // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
-  // finish their current stage on their own threads; they must be gone before Python is.
-  m.def("wait_for_interrupted_calls", [] {
-    py::gil_scoped_release release;
-    AbandonedWorkers::instance().wait_all();
-  });
-
   m.def("load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
         py::arg("path"));
+}
+
+}  // namespace qm3d::python
+
+PYBIND11_MODULE(_qm3d, m) {
+  using namespace qm3d;
+  using namespace qm3d::python;
+  m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
+  m.attr("__version__") = kVersion;
+  m.attr("__commit__") = git_commit();
+  bind_errors_and_metrics(m);
+  bind_inputs(m);
+  bind_results(m);
+  bind_scoring(m);
+  bind_sampling(m);
+  bind_render_views(m);
+  bind_image_quality(m);
+  bind_evaluation(m);
+  bind_evaluate_metrics(m);
 }
