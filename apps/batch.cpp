@@ -29,6 +29,7 @@
 #include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
 // A batch's progress: rows (one per pair and metric) and pairs (done when each of its rows is),
@@ -127,7 +128,7 @@ ScoredRow score_pair(const ListPair& pair, const std::string& metric, const Batc
     }
     ref_read.texture_option = "the list's ref_texture column";
     dist_read.texture_option = "the list's dist_texture column";
-    const Input r = registry().read(ref, ref_read), d = registry().read(dist, dist_read);
+    const Input r = default_registry().read(ref, ref_read), d = default_registry().read(dist, dist_read);
     const auto specs = metrics_for(metric, r, d);
     ScoreRequest request = o.request;
     request.release_inputs = o.report_dir.empty();  // a report reads both inputs
@@ -212,7 +213,7 @@ class PairReports {
       if (f.size() < 6 || f[0] == "reference") continue;
       IndexRow r{f[0], f[1], f[2], std::nullopt, f[5], ""};
       if (f[4] == "ok" && !f[3].empty()) r.score = std::stod(f[3]);
-      if (const MetricSpec* spec = registry().find(r.metric)) r.higher_is_better = spec->higher_is_better;
+      if (const MetricSpec* spec = default_registry().find(r.metric)) r.higher_is_better = spec->higher_is_better;
       const std::string name = report_file_name(r.reference, r.distorted);
       if (std::filesystem::exists(o_.report_dir / name)) r.report = name;
       rows.push_back(std::move(r));
@@ -501,8 +502,8 @@ std::filesystem::path resolve(const std::filesystem::path& list, const std::stri
 std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesystem::path& list) {
   if (pair.metric != "compare" && pair.metric != "auto") return {pair.metric};
   try {
-    const Input ref = registry().read(resolve(list, pair.reference));
-    const Input dist = registry().read(resolve(list, pair.distorted));
+    const Input ref = default_registry().read(resolve(list, pair.reference));
+    const Input dist = default_registry().read(resolve(list, pair.distorted));
     std::vector<std::string> names;
     for (const MetricSpec* m : metrics_for(pair.metric, ref, dist)) names.push_back(m->name);
     return names;
@@ -519,8 +520,8 @@ std::vector<std::string> list_value_names(const std::vector<ListPair>& pairs) {
   for (const ListPair& p : pairs) {
     if (p.metric == "compare") {
       // Every metric's value columns, as qm3d.dask's fixed schema has them.
-      for (const MetricSpec& s : registry().metrics()) specs.push_back(&s);
-    } else if (const MetricSpec* s = registry().find(p.metric)) {
+      for (const MetricSpec& s : default_registry().metrics()) specs.push_back(&s);
+    } else if (const MetricSpec* s = default_registry().find(p.metric)) {
       specs.push_back(s);
     }
   }

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "commands.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 #include "shard.h"
 
 namespace CLI {
@@ -34,7 +34,7 @@ struct BatchOptions {
   /// (index.html; index-K-of-N.html for a shard); empty = none. A pair's report holds the
   /// metrics scored in this run (with --resume, not the rows already done).
   std::filesystem::path report_dir;
-  ReportSettings report;  ///< how the reports are drawn (when report_dir is set)
+  report::ReportSettings report;  ///< how the reports are drawn (when report_dir is set)
   /// Score the jobs (a row each; with report_dir, a pair's rows) in worker processes, one per
   /// concurrent job, each scoring job after job and restarted after a fault, so that a fatal
   /// fault (signal, abort, memory, pair_timeout_s) is that job's error rows, not the batch's

@@ -299,7 +299,7 @@ std::string tidy_results(const std::string& text, const std::vector<RowKey>& ord
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   std::set<std::string> used;
   for (const std::string& m : metrics) {
-    if (const MetricSpec* spec = registry().find(m)) {
+    if (const MetricSpec* spec = default_registry().find(m)) {
       used.insert(spec->value_names.begin(), spec->value_names.end());
     }
   }

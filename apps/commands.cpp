@@ -5,9 +5,6 @@
 #include "distortion_map.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/mesh/metrics.h"
-#include "qm3d/pointcloud/metrics.h"
-#include "qm3d/render/ibsm.h"
 
 namespace qm3d::app {
 
@@ -20,31 +17,20 @@ void emit_text(const std::string& text, const std::string& output) {
   write_file_atomically(output, [&](std::ostream& out) { out << text; });
 }
 
-const Registry& registry() {
-  static const Registry r = [] {
-    Registry reg;
-    mesh::register_metrics(reg);
-    pointcloud::register_metrics(reg);
-    render::register_metrics(reg);
-    return reg;
-  }();
-  return r;
-}
-
 std::vector<const MetricSpec*> metrics_for(const std::string& name, const Input& reference,
                                            const Input& distorted) {
   if (name == "compare") {
-    auto all = registry().applicable(reference, distorted);
+    auto all = default_registry().applicable(reference, distorted);
     if (all.empty()) {
       throw FormatError("no metric applies to " + reference.name() + " and " + distorted.name());
     }
     return all;
   }
-  if (name == "auto") return {&registry().auto_metric(reference, distorted)};
-  const MetricSpec* spec = registry().find(name);
+  if (name == "auto") return {&default_registry().auto_metric(reference, distorted)};
+  const MetricSpec* spec = default_registry().find(name);
   if (!spec) {
     std::string known;
-    for (const auto& m : registry().metrics()) known += m.name + ", ";
+    for (const auto& m : default_registry().metrics()) known += m.name + ", ";
     throw FormatError("unknown metric '" + name + "' (expected " + known + "compare or auto)");
   }
   return {spec};

@@ -9,11 +9,12 @@
 
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result.h"
+#include "qm3d/scoring/registry.h"
 
 namespace qm3d::app {
 
-/// The tool's metrics: the mesh module's, then the point-cloud module's.
-const Registry& registry();
+/// The tool's metrics: qm3d::scoring's one registry (mesh, point cloud, render).
+using scoring::default_registry;
 
 /// Writes a command's output: to stdout (a failed write, e.g. a closed pipe, is an InputError) or,
 /// atomically, to `output` when it is not empty.

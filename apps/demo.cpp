@@ -15,6 +15,7 @@
 #endif
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
 struct DemoPair {
@@ -104,11 +105,11 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
   std::vector<std::pair<Input, Input>> inputs;
   std::vector<const MetricSpec*> columns;
   for (const auto& p : kPairs) {
-    inputs.emplace_back(registry().read(dir / p.reference), registry().read(dir / p.distorted));
+    inputs.emplace_back(default_registry().read(dir / p.reference), default_registry().read(dir / p.distorted));
   }
   // Metrics asked for by name only (MetricSpec::in_compare false, e.g. ibsm's rendering) are
   // left out, as in `compare`.
-  for (const auto& m : registry().metrics()) {
+  for (const auto& m : default_registry().metrics()) {
     if (!m.in_compare) continue;
     for (const auto& [ref, dist] : inputs) {
       if (m.applies(ref, dist)) {

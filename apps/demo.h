@@ -5,7 +5,7 @@
 #include <ostream>
 
 #include "commands.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 
 namespace qm3d::app {
 
@@ -18,6 +18,6 @@ std::filesystem::path default_demo_dir();
 /// directory) and prints its path. Without three.js the report is skipped with a warning, unless
 /// a folder was given (then InputError). Returns the exit code.
 int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
-             const ReportCli& report, bool quiet, std::ostream& out);
+             const report::ReportCli& report, bool quiet, std::ostream& out);
 
 }  // namespace qm3d::app

@@ -8,19 +8,22 @@
 #include <set>
 #include <sstream>
 
-#include "eval_plot.h"
+#include "qm3d/report/eval_plot.h"
 #include "eval_protocol.h"
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation.h"
-#include "qm3d/common/evaluation_io.h"
+#include "qm3d/evaluation/evaluation.h"
+#include "qm3d/evaluation/evaluation_io.h"
+#include "qm3d/evaluation/orientation.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "commands.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 #include "train_command.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
@@ -111,10 +114,26 @@ void collect_values(EvalData& d) {
   }
 }
 
-// The orientation of the score column: --orientation, else the registered metric every used
-// row of SCORES names in its "metric" column (batch results), asked about that column ("score",
-// "d1_mse", "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe
-// (f1..f8) and for files without a metric column or with several metrics.
+// The metric every used row of SCORES names in its "metric" column (batch results); empty when
+// the file has no metric column, or a row names none or another metric.
+std::string the_metric(const EvalData& d) {
+  const auto c = find_column(d.scores_table, "metric");
+  if (!c) return "";
+  std::string metric;
+  for (std::size_t row : d.join.left) {
+    const auto& cells = d.scores_table.rows[row];
+    const std::string name = *c < cells.size() ? cells[*c] : std::string();
+    if (name.empty() || (!metric.empty() && name != metric)) return "";
+    metric = name;
+  }
+  return metric;
+}
+
+// The orientation of the score column (qm3d::evaluation::orient, Fallback::none):
+// --lower-is-better, --orientation, else the registered metric every used row of SCORES names in
+// its "metric" column (batch results), asked about that column ("score", "d1_mse",
+// "dist_to_ref_d1_psnr"...); unknown for columns the metric does not describe (f1..f8) and for
+// files without a metric column or with several metrics.
 void find_orientation(EvalData& d, const EvalCommandOptions& o) {
   // A name that is not the evaluated column (a typo) is refused, never silently ignored.
   const std::string& evaluated = d.scores_table.header[d.scores_value];
@@ -124,31 +143,11 @@ void find_orientation(EvalData& d, const EvalCommandOptions& o) {
                        ": no such score column (evaluated: " + evaluated + ")");
     }
   }
-  if (!o.lower_is_better.empty()) {
-    d.higher_is_better = false;
-    d.orientation_source = "--lower-is-better";
-    return;
-  }
-  if (o.orientation != "auto") {
-    d.higher_is_better = o.orientation == "quality";
-    d.orientation_source = "--orientation";
-    return;
-  }
-  const auto& h = d.scores_table.header;
-  const auto column = std::find(h.begin(), h.end(), "metric");
-  if (column == h.end()) return;
-  const std::size_t c = static_cast<std::size_t>(column - h.begin());
-  std::string metric;
-  for (std::size_t row : d.join.left) {
-    const auto& cells = d.scores_table.rows[row];
-    const std::string name = c < cells.size() ? cells[c] : std::string();
-    if (name.empty() || (!metric.empty() && name != metric)) return;
-    metric = name;
-  }
-  const MetricSpec* spec = metric.empty() ? nullptr : registry().find(metric);
-  if (spec == nullptr) return;
-  d.higher_is_better = spec->column_higher_is_better(h[d.scores_value]);
-  if (d.higher_is_better) d.orientation_source = "metric column: " + metric;
+  const Orientation orientation =
+      orient(default_registry(), {o.lower_is_better, o.orientation},
+             {evaluated, the_metric(d), evaluated}, Fallback::none);
+  d.higher_is_better = orientation.higher_is_better;
+  d.orientation_source = orientation.source;
 }
 
 EvalData load_eval_data(const EvalCommandOptions& o, CsvTable scores) {

@@ -13,23 +13,25 @@
 #include <sstream>
 
 #include "commands.h"
-#include "eval_plot.h"
+#include "qm3d/report/eval_plot.h"
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation_protocol.h"
+#include "qm3d/evaluation/evaluation_protocol.h"
+#include "qm3d/evaluation/orientation.h"
+#include "qm3d/evaluation/pair_labels.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 using ordered_json = nlohmann::ordered_json;
 namespace fs = std::filesystem;
 
 constexpr double kConfidence = 0.95;
-/// z of a two-sided 95 % normal interval: CI half-width = 1.96 SD / sqrt(n).
-constexpr double kZ95 = 1.959963984540054;
 
 std::vector<std::string> split_list(const std::string& s) {
   std::vector<std::string> out;
@@ -95,36 +97,15 @@ std::vector<std::size_t> numeric_columns(const CsvTable& t, std::size_t key) {
   return out;
 }
 
-// The orientation of a series: --lower-is-better, --orientation, the registered metric its rows
-// name (asked about the column), a column named after a registered metric or one of its named
-// values; else assumed higher = better (Krasula's convention), and said so.
-void orient(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
-  const auto& lower = o.lower_is_better;
-  if (std::find(lower.begin(), lower.end(), s.name) != lower.end()) {
-    m.higher_is_better = false;
-    m.orientation_source = "--lower-is-better";
-    return;
-  }
-  if (o.orientation != "auto") {
-    m.higher_is_better = o.orientation == "quality";
-    m.orientation_source = "--orientation";
-    return;
-  }
-  const std::string& column = s.table->header[s.column];
-  if (const MetricSpec* spec = s.metric.empty() ? nullptr : registry().find(s.metric)) {
-    if (const auto h = spec->column_higher_is_better(column)) {
-      m.higher_is_better = *h;
-      m.orientation_source = "metric column: " + s.metric;
-      return;
-    }
-  }
-  if (const auto h = registry().column_orientation(column)) {
-    m.higher_is_better = h->first;
-    m.orientation_source = h->second;
-    return;
-  }
-  m.higher_is_better = true;
-  m.orientation_source = "assumed: not a registered metric";
+// The orientation of a series (qm3d::evaluation::orient): --lower-is-better, --orientation, the
+// registered metric its rows name (asked about the column), a column named after a registered
+// metric or one of its named values; else assumed higher = better (Krasula's convention).
+void orient_series(const Series& s, const EvalCommandOptions& o, MetricScores& m) {
+  const Orientation r =
+      orient(default_registry(), {o.lower_is_better, o.orientation},
+             {s.name, s.metric, s.table->header[s.column]}, Fallback::column_name_then_quality);
+  m.higher_is_better = *r.higher_is_better;
+  m.orientation_source = r.source;
 }
 
 // Every --lower-is-better name must be one of the series (a typo is refused, never ignored).
@@ -183,7 +164,7 @@ PairLabels pairs_from_sd(const CsvTable& mos, std::size_t mos_column, const Stim
       n.push_back(required_number(mos, row, *n_c, "observer count"));
     } else {
       const double ci = required_number(mos, row, *ci_c, "confidence interval");
-      n.push_back(ci > 0 ? std::pow(kZ95 * sd.back() / ci, 2) : 0.0);
+      n.push_back(observers_from_ci(sd.back(), ci));
     }
     const std::string where = mos.path + ":" + std::to_string(mos.line_numbers[row]);
     if (sd.back() < 0) throw FormatError(where + ": a negative standard deviation");
@@ -192,7 +173,11 @@ PairLabels pairs_from_sd(const CsvTable& mos, std::size_t mos_column, const Stim
                         " observers; Krasula's labels need n >= 2");
     }
   }
-  return label_pairs_j149(m, sd, n, groups);
+  PairLabelSource source;
+  source.kind = PairLabelSource::Kind::sd;
+  source.sd = std::move(sd);
+  source.n = std::move(n);
+  return *label_pairs(m, source, groups);
 }
 
 // Labels from a long-format file of individual scores: stimulus, observer, score (by name or
@@ -226,7 +211,10 @@ PairLabels pairs_from_raw(const EvalCommandOptions& o, const Stimuli& st,
                         std::to_string(scores[i].size()) + " individual scores; at least 2 needed");
     }
   }
-  return label_pairs_raw(scores, groups);
+  PairLabelSource source;
+  source.kind = PairLabelSource::Kind::raw;
+  source.raw = std::move(scores);
+  return *label_pairs({}, source, groups);
 }
 
 // Given labels: first, second, label (+1 first better, -1 worse, 0 similar).
@@ -519,182 +507,239 @@ bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores) {
          split_by_metric(scores).size() > 1;
 }
 
-int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet) {
-  const int sources = !o.sd_column.empty() + !o.raw.empty() + !o.pairs.empty();
-  if (sources > 1) throw InputError("give one of --sd-column, --raw and --pairs");
-  const CsvTable mos = read_csv_table(o.mos);
-  const std::size_t key = key_column(scores, o.scores_key, "--scores-key");
-  const std::size_t mos_key = o.mos_key.empty() ? 0 : require_column(mos, o.mos_key, "--mos-key");
-  const std::size_t mos_value = value_column(mos, o.mos_column, {"mos"}, mos_key, "--mos-column");
-  const auto ci = o.ci_column.empty() ? std::nullopt
-                                      : std::optional(require_column(mos, o.ci_column, "--ci-column"));
+namespace {
 
-  // The tables of the series: each SCORES file (SCORES, then --more-scores), or its rows of each
-  // metric. Deques: the series point into them.
-  struct Part {
-    std::string metric;
-    CsvTable table;
-    std::size_t key = 0;
-    bool pivot = false;
-  };
+// The tables of the series: each SCORES file (SCORES, then --more-scores), or its rows of each
+// metric.
+struct Part {
+  std::string metric;
+  CsvTable table;
+  std::size_t key = 0;
+  bool pivot = false;
+};
+
+// What `eval` reads for the protocol, step by step. Deques: the series point into them (and the
+// object is never moved).
+struct ProtocolData {
+  const CsvTable* scores = nullptr;
+  CsvTable mos;
+  std::size_t key = 0, mos_key = 0, mos_value = 0;
+  std::optional<std::size_t> ci;
   std::deque<Part> parts;
+  std::deque<JoinedRows> joins;
+  std::vector<Series> series;
+  std::vector<std::map<std::string, double>> values;  ///< per series: key -> finite score
+  KeyList left_out;
+  Stimuli st;
+  SubjectiveData subjective;
+};
+
+void read_tables(ProtocolData& d, const EvalCommandOptions& o, const CsvTable& scores) {
+  d.scores = &scores;
+  d.mos = read_csv_table(o.mos);
+  d.key = key_column(scores, o.scores_key, "--scores-key");
+  d.mos_key = o.mos_key.empty() ? 0 : require_column(d.mos, o.mos_key, "--mos-key");
+  d.mos_value = value_column(d.mos, o.mos_column, {"mos"}, d.mos_key, "--mos-column");
+  d.ci = o.ci_column.empty() ? std::nullopt
+                             : std::optional(require_column(d.mos, o.ci_column, "--ci-column"));
   std::vector<CsvTable> files = {scores};
   for (const std::string& f : o.more_scores) files.push_back(read_csv_table(f));
   for (const CsvTable& t : files) {
-    const std::size_t k = &t == &files.front() ? key : key_column(t, o.scores_key, "--scores-key");
+    const std::size_t k = &t == &files.front() ? d.key : key_column(t, o.scores_key, "--scores-key");
     auto split = split_by_metric(t);
     const bool pivot = split.size() > 1;
-    for (auto& [metric, table] : split) parts.push_back({metric, std::move(table), k, pivot});
+    for (auto& [metric, table] : split) d.parts.push_back({metric, std::move(table), k, pivot});
   }
-  std::deque<JoinedRows> joins;
   bool joined = false;
-  for (const Part& part : parts) {
-    joins.push_back(join_on_key(part.table, part.key, mos, mos_key, o.stem));
-    joined = joined || !joins.back().keys.empty();
+  for (const Part& part : d.parts) {
+    d.joins.push_back(join_on_key(part.table, part.key, d.mos, d.mos_key, o.stem));
+    joined = joined || !d.joins.back().keys.empty();
   }
-  if (!joined) throw FormatError(no_common_key(scores, key, mos, mos_key));
-  std::vector<Series> series;
-  std::set<std::string> names_taken;
-  for (std::size_t p = 0; p < parts.size(); ++p) {
-    const CsvTable& t = parts[p].table;
-    std::vector<std::size_t> columns;
-    if (o.scores_column == "all") {
-      columns = numeric_columns(t, parts[p].key);
-    } else if (o.scores_column.empty()) {
-      columns.push_back(value_column(t, "", {"score"}, parts[p].key, "--scores-column"));
-    } else {
-      for (const std::string& c : split_list(o.scores_column)) {
-        columns.push_back(require_column(t, c, "--scores-column"));
-      }
+  if (!joined) throw FormatError(no_common_key(scores, d.key, d.mos, d.mos_key));
+}
+
+// The score columns of a part: "all" numeric ones, the default one, or the named ones.
+std::vector<std::size_t> score_columns(const Part& part, const EvalCommandOptions& o) {
+  std::vector<std::size_t> columns;
+  if (o.scores_column == "all") {
+    columns = numeric_columns(part.table, part.key);
+  } else if (o.scores_column.empty()) {
+    columns.push_back(value_column(part.table, "", {"score"}, part.key, "--scores-column"));
+  } else {
+    for (const std::string& c : split_list(o.scores_column)) {
+      columns.push_back(require_column(part.table, c, "--scores-column"));
     }
-    for (std::size_t c : columns) {
+  }
+  return columns;
+}
+
+void make_series(ProtocolData& d, const EvalCommandOptions& o) {
+  std::set<std::string> names_taken;
+  for (std::size_t p = 0; p < d.parts.size(); ++p) {
+    const CsvTable& t = d.parts[p].table;
+    for (std::size_t c : score_columns(d.parts[p], o)) {
       const std::string& header = t.header[c];
       std::string name = header;
-      if (parts[p].pivot) name = header == "score" ? parts[p].metric : parts[p].metric + ":" + header;
+      if (d.parts[p].pivot) {
+        name = header == "score" ? d.parts[p].metric : d.parts[p].metric + ":" + header;
+      }
       // The same name from another file: its file stem in front ("run2:psnr").
       if (names_taken.count(name)) name = fs::path(t.path).stem().string() + ":" + name;
       names_taken.insert(name);
-      series.push_back({name, &t, c, parts[p].metric, &joins[p]});
+      d.series.push_back({name, &t, c, d.parts[p].metric, &d.joins[p]});
     }
   }
-  if (series.empty()) throw FormatError(o.scores + ": no numeric score column");
-  check_lower_is_better(series, o);
+  if (d.series.empty()) throw FormatError(o.scores + ": no numeric score column");
+  check_lower_is_better(d.series, o);
+}
 
-  // The stimuli every series and the MOS have a finite value for, in the first series' order.
-  std::vector<std::map<std::string, double>> values(series.size());
-  KeyList left_out;
-  for (std::size_t s = 0; s < series.size(); ++s) {
-    const JoinedRows& j = *series[s].join;
+// Each series' finite scores by key. A series without a single finite score (a failed batch
+// pair's "compare" row, a column of text) is left out with a warning rather than emptying the
+// stimuli every series must share.
+void collect_series_values(ProtocolData& d, const EvalCommandOptions& o, bool quiet) {
+  d.values.resize(d.series.size());
+  for (std::size_t s = 0; s < d.series.size(); ++s) {
+    const JoinedRows& j = *d.series[s].join;
     for (std::size_t i = 0; i < j.keys.size(); ++i) {
-      const auto v = cell_number(*series[s].table, j.left[i], series[s].column, true);
-      if (v && std::isfinite(*v)) values[s][j.keys[i]] = *v;
+      const auto v = cell_number(*d.series[s].table, j.left[i], d.series[s].column, true);
+      if (v && std::isfinite(*v)) d.values[s][j.keys[i]] = *v;
     }
   }
-  // A series without a single finite score (a failed batch pair's "compare" row, a column of
-  // text) is left out with a warning rather than emptying the stimuli every series must share.
-  for (std::size_t k = series.size(); k-- > 0;) {
-    if (!values[k].empty()) continue;
+  for (std::size_t k = d.series.size(); k-- > 0;) {
+    if (!d.values[k].empty()) continue;
     if (!quiet) {
-      std::cerr << "qm3d: warning: " << o.scores << ": " << series[k].name
+      std::cerr << "qm3d: warning: " << o.scores << ": " << d.series[k].name
                 << " has no finite score on the stimuli of " << o.mos << "; left out\n";
     }
-    series.erase(series.begin() + static_cast<std::ptrdiff_t>(k));
-    values.erase(values.begin() + static_cast<std::ptrdiff_t>(k));
+    d.series.erase(d.series.begin() + static_cast<std::ptrdiff_t>(k));
+    d.values.erase(d.values.begin() + static_cast<std::ptrdiff_t>(k));
   }
-  if (series.empty()) throw FormatError(o.scores + ": no finite score of any metric");
-  // Every joined key once, in the order the parts first name it, with its MOS row.
+  if (d.series.empty()) throw FormatError(o.scores + ": no finite score of any metric");
+}
+
+// The stimuli every series and the MOS have a finite value for: every joined key once, in the
+// order the parts first name it, with its MOS row.
+void select_stimuli(ProtocolData& d, const EvalCommandOptions& o) {
   std::map<std::string, std::size_t> mos_row;
   std::vector<std::string> candidates;
-  for (const auto& j : joins) {
+  for (const auto& j : d.joins) {
     for (std::size_t i = 0; i < j.keys.size(); ++i) {
       if (mos_row.emplace(j.keys[i], j.right[i]).second) candidates.push_back(j.keys[i]);
     }
   }
-  Stimuli st;
-  SubjectiveData subjective;
   for (const std::string& k : candidates) {
     const std::size_t row = mos_row.at(k);
-    const auto m = cell_number(mos, row, mos_value);
-    const auto c = ci ? cell_number(mos, row, *ci) : std::optional<double>(0);
+    const auto m = cell_number(d.mos, row, d.mos_value);
+    const auto c = d.ci ? cell_number(d.mos, row, *d.ci) : std::optional<double>(0);
     bool all = m && c;
-    for (const auto& v : values) all = all && v.count(k);
+    for (const auto& v : d.values) all = all && v.count(k);
     if (!all) {
-      left_out.add(k);
+      d.left_out.add(k);
       continue;
     }
-    st.add(k, row);
-    subjective.mos.push_back(*m);
-    if (ci) subjective.ci95.push_back(*c);
+    d.st.add(k, row);
+    d.subjective.mos.push_back(*m);
+    if (d.ci) d.subjective.ci95.push_back(*c);
   }
-  if (st.keys.empty()) {
+  if (d.st.keys.empty()) {
     throw FormatError("no stimulus in common between " + o.scores + " and " + o.mos +
                       " with a value of every metric");
   }
-  if (!quiet) {
-    for (std::size_t p = 0; p < joins.size(); ++p) {
-      const std::string what = parts[p].pivot ? " (" + parts[p].metric + ")" : "";
-      if (joins[p].left_only.count) {
-        std::cerr << "qm3d: warning: " << parts[p].table.path << what << ": " << joins[p].left_only.count
-                  << " rows have no partner in " << mos.path << ": "
-                  << joins[p].left_only.examples() << "\n";
-      }
-    }
-    if (joins[0].right_only.count) {
-      std::cerr << "qm3d: warning: " << mos.path << ": " << joins[0].right_only.count
-                << " rows have no partner in " << scores.path << ": "
-                << joins[0].right_only.examples() << "\n";
+}
+
+void warn_unjoined(const ProtocolData& d) {
+  for (std::size_t p = 0; p < d.joins.size(); ++p) {
+    const std::string what = d.parts[p].pivot ? " (" + d.parts[p].metric + ")" : "";
+    if (d.joins[p].left_only.count) {
+      std::cerr << "qm3d: warning: " << d.parts[p].table.path << what << ": "
+                << d.joins[p].left_only.count << " rows have no partner in " << d.mos.path
+                << ": " << d.joins[p].left_only.examples() << "\n";
     }
   }
-  if (!quiet && left_out.count) {
-    std::cerr << "qm3d: warning: " << left_out.count
+  if (d.joins[0].right_only.count) {
+    std::cerr << "qm3d: warning: " << d.mos.path << ": " << d.joins[0].right_only.count
+              << " rows have no partner in " << d.scores->path << ": "
+              << d.joins[0].right_only.examples() << "\n";
+  }
+  if (d.left_out.count) {
+    std::cerr << "qm3d: warning: " << d.left_out.count
               << " stimuli left out (a metric's score empty, NaN or infinite, or no MOS): "
-              << left_out.examples() << "\n";
+              << d.left_out.examples() << "\n";
   }
+}
+
+// Krasula's pair labels from --sd-column, --raw or --pairs (within --group-column's groups).
+void label_stimuli(ProtocolData& d, const EvalCommandOptions& o) {
   std::vector<std::string> groups;
   if (!o.group_column.empty()) {
-    const std::size_t g = require_column(mos, o.group_column, "--group-column");
-    for (std::size_t row : st.mos_rows) groups.push_back(mos.rows[row][g]);
+    const std::size_t g = require_column(d.mos, o.group_column, "--group-column");
+    for (std::size_t row : d.st.mos_rows) groups.push_back(d.mos.rows[row][g]);
   }
-  if (!o.sd_column.empty()) subjective.pairs = pairs_from_sd(mos, mos_value, st, o, groups);
-  if (!o.raw.empty()) subjective.pairs = pairs_from_raw(o, st, groups);
-  if (!o.pairs.empty()) subjective.pairs = pairs_from_file(o, st);
-  if (subjective.pairs) check_pair_labels(*subjective.pairs, o);
+  if (!o.sd_column.empty()) d.subjective.pairs = pairs_from_sd(d.mos, d.mos_value, d.st, o, groups);
+  if (!o.raw.empty()) d.subjective.pairs = pairs_from_raw(o, d.st, groups);
+  if (!o.pairs.empty()) d.subjective.pairs = pairs_from_file(o, d.st);
+  if (d.subjective.pairs) check_pair_labels(*d.subjective.pairs, o);
+}
 
+std::vector<MetricScores> metric_scores(const ProtocolData& d, const EvalCommandOptions& o) {
   std::vector<MetricScores> metrics;
-  std::vector<std::string> names;
-  for (std::size_t s = 0; s < series.size(); ++s) {
+  for (std::size_t s = 0; s < d.series.size(); ++s) {
     MetricScores m;
-    m.name = series[s].name;
-    for (const std::string& k : st.keys) m.scores.push_back(values[s].at(k));
-    orient(series[s], o, m);
-    names.push_back(m.name);
+    m.name = d.series[s].name;
+    for (const std::string& k : d.st.keys) m.scores.push_back(d.values[s].at(k));
+    orient_series(d.series[s], o, m);
     metrics.push_back(std::move(m));
   }
+  return metrics;
+}
+
+// The files read, as the JSON names them (before the protocol's own fields).
+ordered_json inputs_json(const ProtocolData& d, const EvalCommandOptions& o) {
+  const CsvTable& scores = *d.scores;
+  ordered_json j = {{"command", "eval"}, {"version", kVersion}};
+  j["scores"] = {{"file", scores.path}, {"key", scores.header[d.key]}, {"rows", scores.rows.size()}};
+  j["more_scores"] = o.more_scores;
+  j["mos"] = {{"file", d.mos.path},
+              {"key", d.mos.header[d.mos_key]},
+              {"column", d.mos.header[d.mos_value]},
+              {"ci_column", d.ci ? ordered_json(d.mos.header[*d.ci]) : ordered_json()},
+              {"rows", d.mos.rows.size()}};
+  j["key_match"] = o.stem ? "file stem" : "exact";
+  j["left_out"] = {{"count", d.left_out.count}, {"first", d.left_out.first}};
+  return j;
+}
+
+}  // namespace
+
+int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet) {
+  const int sources = !o.sd_column.empty() + !o.raw.empty() + !o.pairs.empty();
+  if (sources > 1) throw InputError("give one of --sd-column, --raw and --pairs");
+  ProtocolData d;
+  read_tables(d, o, scores);
+  make_series(d, o);
+  collect_series_values(d, o, quiet);
+  select_stimuli(d, o);
+  if (!quiet) warn_unjoined(d);
+  label_stimuli(d, o);
+  const std::vector<MetricScores> metrics = metric_scores(d, o);
+  std::vector<std::string> names;
+  for (const MetricScores& m : metrics) names.push_back(m.name);
   ProtocolOptions options;
   options.evaluation.bootstrap = o.bootstrap;
   options.evaluation.seed = o.seed;
   options.evaluation.confidence = kConfidence;
   options.mapping = parse_mapping(o.mapping.empty() ? "logistic4" : o.mapping);
-  ordered_json j = {{"command", "eval"}, {"version", kVersion}};
-  j["scores"] = {{"file", scores.path}, {"key", scores.header[key]}, {"rows", scores.rows.size()}};
-  j["more_scores"] = o.more_scores;
-  j["mos"] = {{"file", mos.path},
-              {"key", mos.header[mos_key]},
-              {"column", mos.header[mos_value]},
-              {"ci_column", ci ? ordered_json(mos.header[*ci]) : ordered_json()},
-              {"rows", mos.rows.size()}};
-  j["key_match"] = o.stem ? "file stem" : "exact";
-  j["left_out"] = {{"count", left_out.count}, {"first", left_out.first}};
-  const ProtocolResult result = run_protocol(metrics, subjective, options);
-  j.update(protocol_json(metrics, subjective, result));
+  ordered_json j = inputs_json(d, o);
+  const ProtocolResult result = run_protocol(metrics, d.subjective, options);
+  j.update(protocol_json(metrics, d.subjective, result));
   j["bootstrap"] = {{"replicates", o.bootstrap},
                     {"seed", o.seed},
                     {"confidence", kConfidence},
                     {"method", "percentile; stimuli resampled with replacement; mapping refitted"}};
-  if (!quiet) warn_orientation(metrics, j, st.keys.size());
-  if (!o.plot.empty()) plot_protocol(o.plot, metrics, subjective, result, j, o.mos_column);
+  if (!quiet) warn_orientation(metrics, j, d.st.keys.size());
+  if (!o.plot.empty()) plot_protocol(o.plot, metrics, d.subjective, result, j, o.mos_column);
   emit_text(o.json ? j.dump(2) + "\n" : o.csv ? protocol_csv(j, names) : protocol_text(j, names),
-       o.output);
+            o.output);
   return 0;
 }
 

@@ -1,24 +1,24 @@
 // `qm3d eval` on several metrics, or with Krasula's analysis: reads the score columns, the
 // subjective data (MOS, CI, SD and n, raw scores or labelled pairs) and prints what
-// qm3d::evaluate_metrics() computes (common/include/qm3d/common/evaluation_protocol.h).
+// qm3d::evaluate_metrics() computes (evaluation/include/qm3d/evaluation/evaluation_protocol.h).
 #pragma once
 
 #include "eval_commands.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
 
 /// True when `eval` needs the protocol (several score columns, a batch file of several metrics,
 /// or subjective data for Krasula's analysis) rather than the one-column evaluation.
-bool needs_protocol(const EvalCommandOptions& o, const CsvTable& scores);
+bool needs_protocol(const EvalCommandOptions& o, const evaluation::CsvTable& scores);
 
 /// Runs it on `scores` (the SCORES file, read); the exit code (warnings on stderr unless
 /// `quiet`).
-int run_eval_protocol(const EvalCommandOptions& o, const CsvTable& scores, bool quiet);
+int run_eval_protocol(const EvalCommandOptions& o, const evaluation::CsvTable& scores, bool quiet);
 
 /// "no stimulus in common between SCORES (key "k", e.g. "/d/a.ply") and MOS (key ..., e.g.
 /// "a_1"), whole or by file stem (--stem); ...": one key of each side, for the error.
-std::string no_common_key(const CsvTable& scores, std::size_t scores_key, const CsvTable& mos,
+std::string no_common_key(const evaluation::CsvTable& scores, std::size_t scores_key, const evaluation::CsvTable& mos,
                           std::size_t mos_key);
 
 /// Whether an SROCC of `rho` on `n` stimuli is clearly non-zero: |rho| sqrt(n - 1) > 1.96, the

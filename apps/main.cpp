@@ -13,7 +13,7 @@
 #include "demo.h"
 #include "eval_commands.h"
 #include "help_format.h"
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 #include "image_command.h"
 #include "merge_command.h"
 #include "metric_cli.h"
@@ -26,6 +26,7 @@
 #include "sample_commands.h"
 
 namespace qm3d::app {
+using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
 // Exit codes (README "Exit codes").
@@ -99,7 +100,7 @@ std::string render(const std::vector<MetricResult>& results, const OutputOptions
   } else if (o.csv) {
     std::vector<const MetricSpec*> specs;
     for (const auto& r : results) {
-      if (const MetricSpec* s = registry().find(r.metric)) specs.push_back(s);
+      if (const MetricSpec* s = default_registry().find(r.metric)) specs.push_back(s);
     }
     const std::vector<std::string> values = csv_value_names(specs);
     out << csv_header(values) << "\n";
@@ -160,9 +161,9 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
   check_score_outputs(cli, c.report);
   request.keep_per_element = report.has_value();
   const Input ref =
-      registry().read(cli.ref, read_options(cli.colour_scale, cli.ref_texture, "--ref-texture"));
+      default_registry().read(cli.ref, read_options(cli.colour_scale, cli.ref_texture, "--ref-texture"));
   const Input dist =
-      registry().read(cli.dist, read_options(cli.colour_scale, cli.dist_texture, "--dist-texture"));
+      default_registry().read(cli.dist, read_options(cli.colour_scale, cli.dist_texture, "--dist-texture"));
   const auto chosen = metrics_for(c.spec ? c.spec->name : "compare", ref, dist);
   std::vector<MetricResult> results;
   const bool show = !g.quiet && (cli.progress || stderr_is_terminal());
@@ -185,7 +186,7 @@ int run_score_command(const ScoreCommand& c, const GlobalOptions& g) {
 // "qm3d 0.1.0 (commit ...)" and the reference tool each metric reproduces.
 std::string version_text() {
   std::string text = std::string("qm3d ") + kVersion + " (commit " + git_commit() + ")";
-  for (const MetricSpec& spec : registry().metrics()) {
+  for (const MetricSpec& spec : default_registry().metrics()) {
     text += "\n  " + spec.name + ": " +
             (spec.reproduces.empty() ? "qm3d's own definition (no reference implementation)"
                                      : "reproduces " + spec.reproduces);
@@ -197,7 +198,7 @@ std::string version_text() {
 // registry's orientation of each metric.
 std::string orientation_line() {
   std::string distortions, qualities;
-  for (const MetricSpec& spec : registry().metrics()) {
+  for (const MetricSpec& spec : default_registry().metrics()) {
     std::string& list = spec.higher_is_better ? qualities : distortions;
     list += (list.empty() ? "" : ", ") + spec.title;
   }
@@ -211,41 +212,31 @@ std::string orientation_line() {
   return line + ".";
 }
 
-int run(int argc, char** argv) {
-  CLI::App app{"qm3d " + std::string(kVersion) +
-               " - visual quality metrics for coloured 3D content: CMDM and MSDM2 for meshes, "
-               "PCQM for coloured point clouds, MPEG pc_error's PSNR and mmetric's IBSM (image-based, on rendered views).\n" +
-               orientation_line() +
-               " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
-               "mesh."};
-  app.formatter(wrapping_formatter(help_width()));  // before the commands, which inherit it
-  app.set_version_flag("--version", version_text());
-  app.require_subcommand(1);
-  GlobalOptions global;
-  add_global_options(&app, global);
-  bool batch_worker = false;  // set only in a worker process of `qm3d batch` (batch.h)
-  app.add_flag("--batch-worker", batch_worker)->group("");
+CLI::App* add_score_command(CLI::App& app, std::vector<ScoreCommand>& commands,
+                            const MetricSpec* spec, const std::string& name,
+                            const std::string& help, bool report = false) {
+  commands.push_back({spec, app.add_subcommand(name, help), report});
+  return commands.back().cmd;
+}
 
-  // cmdm, msdm2, pcqm, ... (one per registered metric) and compare.
-  std::vector<ScoreCommand> score_commands;
-  for (const MetricSpec& spec : registry().metrics()) {
-    score_commands.push_back({&spec, app.add_subcommand(spec.name, spec.summary)});
+// cmdm, msdm2, pcqm, ... (one per registered metric), compare and report.
+std::vector<ScoreCommand> add_score_commands(CLI::App& app, GlobalOptions& global) {
+  std::vector<ScoreCommand> commands;
+  for (const MetricSpec& spec : default_registry().metrics()) {
+    add_score_command(app, commands, &spec, spec.name, spec.summary);
   }
-  score_commands.push_back(
-      {nullptr, app.add_subcommand("compare",
-                                   "Every metric that applies: CMDM, MSDM2, PCQM on the vertices "
-                                   "and PCQM on surface samples (pcqm_sampled; both meshes "
-                                   "sampled alike), D_LAB for two meshes, PCQM, PSNR and D_LAB for "
-                                   "two clouds (ibsm, seconds of rendering per pair, only by name)")});
-  score_commands.push_back(
-      {nullptr,
-       app.add_subcommand("report",
-                          "Run every metric that applies (as compare) and write one "
-                          "self-contained HTML report: scores, features, options, warnings, "
-                          "linked 3-D views of both objects and the local-distortion heat map, "
-                          "its histogram and hottest regions. Prints the scores as compare does"),
-       true});
-  for (const ScoreCommand& c : score_commands) {
+  add_score_command(app, commands, nullptr, "compare",
+                    "Every metric that applies: CMDM, MSDM2, PCQM on the vertices "
+                    "and PCQM on surface samples (pcqm_sampled; both meshes "
+                    "sampled alike), D_LAB for two meshes, PCQM, PSNR and D_LAB for "
+                    "two clouds (ibsm, seconds of rendering per pair, only by name)");
+  add_score_command(app, commands, nullptr, "report",
+                    "Run every metric that applies (as compare) and write one "
+                    "self-contained HTML report: scores, features, options, warnings, "
+                    "linked 3-D views of both objects and the local-distortion heat map, "
+                    "its histogram and hottest regions. Prints the scores as compare does",
+                    true);
+  for (const ScoreCommand& c : commands) {
     ScoreCli& cli = *c.cli;
     add_global_options(c.cmd, global);
     add_progress_flag(c.cmd, cli.progress);
@@ -260,14 +251,45 @@ int run(int argc, char** argv) {
                                                                    c.spec->per_element_positions));
     add_report_options(c.cmd, cli.report, c.report);
   }
+  return commands;
+}
 
+// `qm3d batch LIST -o RESULTS` and what it parses into.
+struct BatchCommand {
+  CLI::App* cmd = nullptr;
   BatchOptions batch;
-  RunCli batch_run;
-  MetricOptionsCli batch_options;
+  RunCli run;
+  MetricOptionsCli options;
   std::string list, results;
+  std::string colour_scale = "auto";
+  ReportCli report;
+};
+
+void add_batch_options(CLI::App* cmd, BatchCommand& c) {
+  cmd->add_option("LIST", c.list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", c.results, "Results CSV")->required()->type_name("RESULTS.csv");
+  cmd->add_option("-j,--jobs", c.batch.jobs, "Pairs scored at the same time")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  cmd->add_flag("--resume", c.batch.resume,
+                "Skip the pairs already in RESULTS (scored with the same settings; error rows "
+                "too, unless --retry-failed)");
+  cmd->add_flag("--overwrite", c.batch.overwrite, "Replace an existing RESULTS");
+  add_batch_safety_options(cmd, c.batch);
+  add_read_options(cmd, c.colour_scale);
+  add_run_options(cmd, c.run, nullptr);
+  add_metric_options(cmd, all_metrics(), c.options);
+  add_shard_option(cmd, c.batch.shard);
+  add_report_dir_options(cmd, c.report,
+                         "Also write one HTML report per pair into DIR (created if needed) and "
+                         "DIR/index.html listing every pair by score, linking to its report");
+}
+
+std::unique_ptr<BatchCommand> add_batch_command(CLI::App& app, GlobalOptions& global) {
+  auto c = std::make_unique<BatchCommand>();
   std::string metric_names;
-  for (const auto& m : registry().metrics()) metric_names += m.name + ", ";
-  auto* batch_cmd = app.add_subcommand(
+  for (const auto& m : default_registry().metrics()) metric_names += m.name + ", ";
+  c->cmd = app.add_subcommand(
       "batch", "Score every pair of LIST.csv (columns reference,distorted[,metric]; metric = " +
                    metric_names +
                    "compare (one row per metric that applies) or auto (the first that applies: "
@@ -275,54 +297,89 @@ int run(int argc, char** argv) {
                    "folder). Each row is appended to RESULTS as soon as it is done; a failing "
                    "pair records its error in its row, also one that crashes (pairs are scored "
                    "in worker processes). Exit code 2 while a row of RESULTS records an error");
-  add_global_options(batch_cmd, global);
-  batch_cmd->add_option("LIST", list, "CSV list of pairs")->required()->check(CLI::ExistingFile);
-  batch_cmd->add_option("-o,--output", results, "Results CSV")->required()->type_name("RESULTS.csv");
-  batch_cmd->add_option("-j,--jobs", batch.jobs, "Pairs scored at the same time")
-      ->check(CLI::Range(1, 256))
-      ->capture_default_str();
-  batch_cmd->add_flag(
-      "--resume", batch.resume,
-      "Skip the pairs already in RESULTS (scored with the same settings; error rows "
-      "too, unless --retry-failed)");
-  batch_cmd->add_flag("--overwrite", batch.overwrite, "Replace an existing RESULTS");
-  add_batch_safety_options(batch_cmd, batch);
-  std::string batch_colour_scale = "auto";
-  add_read_options(batch_cmd, batch_colour_scale);
-  add_run_options(batch_cmd, batch_run, nullptr);
-  add_metric_options(batch_cmd, all_metrics(), batch_options);
-  add_shard_option(batch_cmd, batch.shard);
-  ReportCli batch_report;
-  add_report_dir_options(batch_cmd, batch_report,
-                         "Also write one HTML report per pair into DIR (created if needed) and "
-                         "DIR/index.html listing every pair by score, linking to its report");
+  add_global_options(c->cmd, global);
+  add_batch_options(c->cmd, *c);
+  return c;
+}
 
-  auto* demo_cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d with "
-                                              "every metric that applies and print the table");
-  add_global_options(demo_cmd, global);
-  std::string demo_dir = default_demo_dir().string();
-  demo_cmd->add_option("--dir", demo_dir, "Folder of the bundled stimuli")->capture_default_str();
-  ReportCli demo_report;
-  add_report_dir_options(demo_cmd, demo_report,
+int run_batch_command(BatchCommand& c, const GlobalOptions& global, bool worker, int argc,
+                      char** argv) {
+  BatchOptions& batch = c.batch;
+  batch.list = c.list;
+  batch.output = c.results;
+  batch.threads = global.threads;
+  batch.quiet = global.quiet;
+  batch.request = score_request(c.run, nullptr, global.threads, global.data_dir);
+  batch.request.options = metric_option_values(all_metrics(), c.options);
+  batch.request.read = read_options(c.colour_scale);
+  if (!c.report.file.empty()) {
+    batch.report_dir = c.report.file;
+    batch.report = report_settings(c.report);
+  }
+  batch.program = argv[0];
+  batch.command_line.assign(argv + 1, argv + argc);
+  return worker ? run_batch_worker(batch) : run_batch(batch);
+}
+
+// `qm3d demo` and what it parses into.
+struct DemoCommand {
+  CLI::App* cmd = nullptr;
+  std::string dir = default_demo_dir().string();
+  ReportCli report;
+};
+
+std::unique_ptr<DemoCommand> add_demo_command(CLI::App& app, GlobalOptions& global) {
+  auto c = std::make_unique<DemoCommand>();
+  c->cmd = app.add_subcommand("demo", "Score the small stimuli bundled with qm3d with "
+                                      "every metric that applies and print the table");
+  add_global_options(c->cmd, global);
+  c->cmd->add_option("--dir", c->dir, "Folder of the bundled stimuli")->capture_default_str();
+  add_report_dir_options(c->cmd, c->report,
                          "Folder for the HTML report of one bundled pair (default: a new folder "
                          "in the system's temporary directory)");
+  return c;
+}
 
-  const auto eval_commands =
-      add_eval_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
-  const auto sample_commands =
-      add_sample_commands(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
-  const auto merge_command =
-      add_merge_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
-  const auto image_command =
-      add_image_command(app, [&](CLI::App* cmd) { add_global_options(cmd, global); });
+int run_demo_command(const DemoCommand& c, const GlobalOptions& global) {
+  ScoreRequest demo;
+  demo.run.threads = global.threads;
+  demo.run.data_dir = global.data_dir;
+  return run_demo(c.dir, demo, c.report, global.quiet, std::cout);
+}
 
+std::string app_description() {
+  return "qm3d " + std::string(kVersion) +
+         " - visual quality metrics for coloured 3D content: CMDM and MSDM2 for meshes, "
+         "PCQM for coloured point clouds, MPEG pc_error's PSNR and mmetric's IBSM (image-based, on rendered views).\n" +
+         orientation_line() +
+         " Inputs are recognised by content (PLY, OBJ, OFF, PCD); a PLY with faces is a "
+         "mesh.";
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{app_description()};
+  app.formatter(wrapping_formatter(help_width()));  // before the commands, which inherit it
+  app.set_version_flag("--version", version_text());
+  app.require_subcommand(1);
+  GlobalOptions global;
+  add_global_options(&app, global);
+  bool batch_worker = false;  // set only in a worker process of `qm3d batch` (batch.h)
+  app.add_flag("--batch-worker", batch_worker)->group("");
+  const auto add_common = [&](CLI::App* cmd) { add_global_options(cmd, global); };
+  // The order of the commands is the order of --help.
+  const std::vector<ScoreCommand> score_commands = add_score_commands(app, global);
+  const auto batch_command = add_batch_command(app, global);
+  const auto demo_command = add_demo_command(app, global);
+  const auto eval_commands = add_eval_commands(app, add_common);
+  const auto sample_commands = add_sample_commands(app, add_common);
+  const auto merge_command = add_merge_command(app, add_common);
+  const auto image_command = add_image_command(app, add_common);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitUsage;
   }
-
   check_thread_count(global.threads);  // before libgomp is asked for that many
   if (global.threads > 0) omp_set_num_threads(global.threads);
   if (const auto code = run_eval_commands(*eval_commands, global.quiet)) return *code;
@@ -334,26 +391,10 @@ int run(int argc, char** argv) {
   for (const ScoreCommand& c : score_commands) {
     if (*c.cmd) return run_score_command(c, global);
   }
-  if (*batch_cmd) {
-    batch.list = list;
-    batch.output = results;
-    batch.threads = global.threads;
-    batch.quiet = global.quiet;
-    batch.request = score_request(batch_run, nullptr, global.threads, global.data_dir);
-    batch.request.options = metric_option_values(all_metrics(), batch_options);
-    batch.request.read = read_options(batch_colour_scale);
-    if (!batch_report.file.empty()) {
-      batch.report_dir = batch_report.file;
-      batch.report = report_settings(batch_report);
-    }
-    batch.program = argv[0];
-    batch.command_line.assign(argv + 1, argv + argc);
-    return batch_worker ? run_batch_worker(batch) : run_batch(batch);
+  if (*batch_command->cmd) {
+    return run_batch_command(*batch_command, global, batch_worker, argc, argv);
   }
-  ScoreRequest demo;
-  demo.run.threads = global.threads;
-  demo.run.data_dir = global.data_dir;
-  return run_demo(demo_dir, demo, demo_report, global.quiet, std::cout);
+  return run_demo_command(*demo_command, global);
 }
 
 }  // namespace

@@ -4,9 +4,10 @@
 #include <set>
 #include <sstream>
 
-#include "qm3d/common/model_io.h"
+#include "qm3d/evaluation/model_io.h"
 
 namespace qm3d::app {
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 constexpr const char* kModelHelp =
@@ -78,13 +79,13 @@ std::string cli_flag(const std::string& option) {
 
 std::vector<const MetricSpec*> all_metrics() {
   std::vector<const MetricSpec*> all;
-  for (const auto& m : registry().metrics()) all.push_back(&m);
+  for (const auto& m : default_registry().metrics()) all.push_back(&m);
   return all;
 }
 
 std::vector<const MetricSpec*> compare_metrics() {
   std::vector<const MetricSpec*> out;
-  for (const auto& m : registry().metrics()) {
+  for (const auto& m : default_registry().metrics()) {
     if (m.in_compare) out.push_back(&m);
   }
   return out;

@@ -73,9 +73,9 @@ int run_grid_sample(const SampleCommands& c) {
     }
     o.box = b;
   }
-  const Input input = registry().read(c.input, texture_read_options(c));
+  const Input input = default_registry().read(c.input, texture_read_options(c));
   if (!input.is_mesh()) throw FormatError(c.input + ": a point cloud, not a mesh (no faces to sample)");
-  const GridSamples s = registry().grid_sampler()(input, o);
+  const GridSamples s = default_registry().grid_sampler()(input, o);
   for (const std::string& w : s.warnings) warn(c.input + ": " + w);
   if (s.colours.empty()) warn(c.input + ": no vertex colours: the cloud has none");
   ply::WriteData data;
@@ -104,7 +104,7 @@ int run_sample(const SampleCommands& c) {
   check_outputs({{"MESH", c.input}, {"--texture", c.texture}}, {{"-o", c.output}});
   const ColoredCloud cloud = c.vertices
                                  ? vertex_cloud_of(c.input)
-                                 : registry().sampler()(registry().read(c.input, texture_read_options(c)),
+                                 : default_registry().sampler()(default_registry().read(c.input, texture_read_options(c)),
                                                         {c.sampling.points, c.sampling.density,
                                                          c.sampling.seed});
   write_colored_ply(c.output, cloud.positions, cloud.colors, {});

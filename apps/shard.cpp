@@ -14,7 +14,7 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/result_io.h"
-#include "table_text.h"
+#include "qm3d/common/table_text.h"
 
 namespace qm3d::app {
 namespace {

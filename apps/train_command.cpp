@@ -10,13 +10,14 @@
 
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/common/model_io.h"
-#include "qm3d/common/training.h"
+#include "qm3d/evaluation/model_io.h"
+#include "qm3d/evaluation/training.h"
 #include "qm3d/common/version.h"
 #include "qm3d/common/result_io.h"
-#include "score_table.h"
+#include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 
 using ordered_json = nlohmann::ordered_json;

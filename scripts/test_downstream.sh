@@ -57,6 +57,14 @@ else
   fail=1
 fi
 check cmdm meshes/blob3_ref.off meshes/blob3_bothnoise.off
+# The evaluation toolkit through its deprecated header path and the default registry.
+spearman=$("$SCRATCH/build/score_pair" spearman)
+if [ "$spearman" = "-1 1" ]; then
+  log "ok   evaluation through qm3d/common/evaluation.h (deprecated path): $spearman"
+else
+  log "FAIL evaluation through the deprecated path: '$spearman', expected '-1 1'"
+  fail=1
+fi
 check pcqm clouds/sphere_2k_ref.ply clouds/sphere_2k_cnoise10.ply
 "$PREFIX/bin/qm3d" demo >/dev/null || { log "FAIL: the installed tool's demo"; fail=1; }
 [ -z "$(ls -A "$SCRATCH" | grep -v -e '^prefix$' -e '^build$')" ] ||

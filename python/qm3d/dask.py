@@ -31,19 +31,29 @@ COLUMNS = qm3d._qm3d.csv_header(_VALUE_NAMES).split(",")
 _TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error", "warnings"}
 
 
-def _error_row(reference, distorted, metric, message):
-    row = {c: math.nan for c in COLUMNS}
-    row.update(reference=str(reference), distorted=str(distorted), metric=metric,
-               status="error", error=message)
+def _parsed(line):
+    """A row made by the bindings (the rows ``qm3d batch`` writes: result_io's csv_row and
+    csv_error_row), as a dict of COLUMNS: numbers as floats, empty numbers NaN; an error row's
+    empty text cells NaN too."""
+    import csv
+    fields = next(csv.reader([line]))
+    ok = fields[COLUMNS.index("status")] == "ok"
+    row = {}
+    for name, value in zip(COLUMNS, fields):
+        if not value:
+            row[name] = "" if ok and name in _TEXT_COLUMNS else math.nan
+        else:
+            row[name] = value if name in _TEXT_COLUMNS else float(value)
     return row
 
 
+def _error_row(reference, distorted, metric, message):
+    return _parsed(qm3d._qm3d.csv_error_row(str(reference), str(distorted), str(metric),
+                                            str(message), _VALUE_NAMES))
+
+
 def _row(result, reference, distorted):
-    import csv
-    fields = next(csv.reader([result.csv_row(_VALUE_NAMES)]))
-    row = {}
-    for name, value in zip(COLUMNS, fields):
-        row[name] = value if name in _TEXT_COLUMNS else (float(value) if value else math.nan)
+    row = _parsed(result.csv_row(_VALUE_NAMES))
     row.update(reference=str(reference), distorted=str(distorted))
     return row
 

@@ -16,11 +16,13 @@
 #include <vector>
 
 #include "qm3d/common/error.h"
-#include "qm3d/common/evaluation.h"
-#include "qm3d/common/evaluation_io.h"
-#include "qm3d/common/evaluation_protocol.h"
+#include "qm3d/evaluation/evaluation.h"
+#include "qm3d/evaluation/evaluation_io.h"
+#include "qm3d/evaluation/evaluation_protocol.h"
+#include "qm3d/evaluation/orientation.h"
+#include "qm3d/evaluation/pair_labels.h"
 #include "qm3d/common/metric.h"
-#include "qm3d/common/model_io.h"
+#include "qm3d/evaluation/model_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/mesh_io.h"
@@ -28,23 +30,16 @@
 #include "qm3d/pointcloud/metrics.h"
 #include "qm3d/render/ibsm.h"
 #include "qm3d/render/icid.h"
+#include "qm3d/scoring/registry.h"
 #include "interruptible_call.h"
 
 namespace py = pybind11;
 
 namespace qm3d::python {
 namespace {
+using namespace qm3d::evaluation;  // the evaluation toolkit (qm3d/evaluation/)
 
-const Registry& registry() {
-  static const Registry r = [] {
-    Registry reg;
-    mesh::register_metrics(reg);
-    pointcloud::register_metrics(reg);
-    render::register_metrics(reg);
-    return reg;
-  }();
-  return r;
-}
+using scoring::default_registry;
 
 [[noreturn]] void bad_argument(const std::string& argument, const std::string& what) {
   throw py::value_error(argument + ": " + what);
@@ -220,7 +215,7 @@ struct RunArguments {
 
 MetricResult run(const std::string& metric, const Input& reference, const Input& distorted,
                  const RunArguments& a) {
-  const MetricSpec& spec = registry().get(metric);
+  const MetricSpec& spec = default_registry().get(metric);
   RunOptions run;
   if (a.direction) run.direction = parse_direction(*a.direction);
   if (a.threads < 0) throw py::value_error("threads: must be 0 (all cores) or more");
@@ -292,15 +287,9 @@ render::RgbImage rgb_image_of(const py::array_t<std::uint8_t, py::array::c_style
 }
 
 }  // namespace
-}  // namespace qm3d::python
 
-PYBIND11_MODULE(_qm3d, m) {
-  using namespace qm3d;
-  using namespace qm3d::python;
-  m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
-  m.attr("__version__") = kVersion;
-  m.attr("__commit__") = git_commit();
-
+// The typed errors and the registry's metrics.
+void bind_errors_and_metrics(py::module_& m) {
   // Typed errors: a file that cannot be read is an OSError, bad content a ValueError.
   py::register_exception<InputError>(m, "InputError", PyExc_OSError);
   py::register_exception<FormatError>(m, "FormatError", PyExc_ValueError);
@@ -308,10 +297,13 @@ PYBIND11_MODULE(_qm3d, m) {
 
   m.def("metrics", [] {
     py::list out;
-    for (const MetricSpec& s : registry().metrics()) out.append(spec_dict(s));
+    for (const MetricSpec& s : default_registry().metrics()) out.append(spec_dict(s));
     return out;
   });
+}
 
+// Inputs: read by content or built from arrays, and the metrics that apply.
+void bind_inputs(py::module_& m) {
   py::class_<Input>(m, "Input")
       .def_static(
           "from_file",
@@ -321,7 +313,7 @@ PYBIND11_MODULE(_qm3d, m) {
             o.colour_scale = parse_colour_scale(colour_scale);  // ValueError otherwise
             o.texture = texture;
             o.texture_option = texture_option;
-            return registry().read(path, o);
+            return default_registry().read(path, o);
           },
           py::arg("path"), py::arg("colour_scale") = "auto", py::arg("texture") = "",
           py::arg("texture_option") = "ref_texture= / dist_texture=")
@@ -352,10 +344,13 @@ PYBIND11_MODULE(_qm3d, m) {
 
   m.def("applicable", [](const Input& ref, const Input& dist) {
     std::vector<std::string> names;
-    for (const MetricSpec* s : registry().applicable(ref, dist)) names.push_back(s->name);
+    for (const MetricSpec* s : default_registry().applicable(ref, dist)) names.push_back(s->name);
     return names;
   });
+}
 
+// Results and the rows of `qm3d batch`.
+void bind_results(py::module_& m) {
   py::class_<DirectionResult>(m, "DirectionResult")
       .def_readonly("score", &DirectionResult::score)
       .def_readonly("box_size", &DirectionResult::box_size)
@@ -398,12 +393,19 @@ PYBIND11_MODULE(_qm3d, m) {
           py::arg("value_names") = std::vector<std::string>{});
 
   m.def("csv_header", &csv_header, py::arg("value_names") = std::vector<std::string>{});
+  // The error row of `qm3d batch` (result_io.h): qm3d.dask makes its rows only through these.
+  m.def("csv_error_row", &csv_error_row, py::arg("reference"), py::arg("distorted"),
+        py::arg("metric"), py::arg("error"),
+        py::arg("value_names") = std::vector<std::string>{});
   m.def("csv_value_names", [] {
     std::vector<const MetricSpec*> all;
-    for (const MetricSpec& s : registry().metrics()) all.push_back(&s);
+    for (const MetricSpec& s : default_registry().metrics()) all.push_back(&s);
     return csv_value_names(all);
   });
+}
 
+// Running a metric, and the calls Ctrl-C left running.
+void bind_scoring(py::module_& m) {
   m.def(
       "run",
       [](const std::string& metric, const Input& reference, const Input& distorted,
@@ -420,13 +422,24 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("weights"), py::arg("model_path"), py::arg("progress"),
       py::arg("release_inputs") = false);
 
+
+  // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
+  // finish their current stage on their own threads; they must be gone before Python is.
+  m.def("wait_for_interrupted_calls", [] {
+    py::gil_scoped_release release;
+    AbandonedWorkers::instance().wait_all();
+  });
+}
+
+// Surface and grid sampling.
+void bind_sampling(py::module_& m) {
   m.def(
       "sample",
       [](const Input& mesh, std::size_t points, double density, std::uint64_t seed) {
         ColoredCloud c;
         {
           py::gil_scoped_release release;
-          c = registry().sampler()(mesh, SurfaceSampling{points, density, seed});
+          c = default_registry().sampler()(mesh, SurfaceSampling{points, density, seed});
         }
         return py::make_tuple(rows_as_numpy(c.positions), rows_as_numpy(c.colors));
       },
@@ -452,7 +465,7 @@ PYBIND11_MODULE(_qm3d, m) {
         GridSamples g;
         {
           py::gil_scoped_release release;
-          g = registry().grid_sampler()(mesh, o);
+          g = default_registry().grid_sampler()(mesh, o);
         }
         std::vector<Vec3> p(g.positions.size()), n(g.normals.size());
         for (std::size_t i = 0; i < p.size(); ++i) {
@@ -472,12 +485,15 @@ PYBIND11_MODULE(_qm3d, m) {
       },
       py::arg("mesh"), py::arg("grid_size"), py::arg("box"), py::arg("all_axes"),
       py::arg("bilinear"));
+}
 
+// The rendered views of IBSM.
+void bind_render_views(py::module_& m) {
   m.def(
       "render_views",
       [](const Input& input, const std::string& options_json, std::optional<std::vector<double>> frame,
          int threads) {
-        const MetricSpec& spec = registry().get("ibsm");
+        const MetricSpec& spec = default_registry().get("ibsm");
         const render::IbsmOptions o =
             render::ibsm_options(spec.complete(nlohmann::json::parse(options_json)));
         std::vector<render::View> views;
@@ -521,7 +537,10 @@ PYBIND11_MODULE(_qm3d, m) {
         return py::make_tuple(out, std::vector<float>(f.center.begin(), f.center.end()), f.radius);
       },
       py::arg("input"), py::arg("options_json"), py::arg("frame"), py::arg("threads"));
+}
 
+// Image quality of two images (iCID, SSIM).
+void bind_image_quality(py::module_& m) {
   m.def(
       "image_quality",
       [](const py::array_t<std::uint8_t, py::array::c_style>& a,
@@ -565,7 +584,10 @@ PYBIND11_MODULE(_qm3d, m) {
       },
       py::arg("a"), py::arg("b"), py::arg("intent"), py::arg("iam"), py::arg("omit_maps67"),
       py::arg("downsampling"), py::arg("keep_map"), py::arg("threads"), py::arg("data_dir"));
+}
 
+// Agreement of one metric's scores with subjective scores.
+void bind_evaluation(py::module_& m) {
   m.def(
       "evaluate",
       [](const std::vector<double>& scores, const std::vector<double>& mos,
@@ -589,7 +611,10 @@ PYBIND11_MODULE(_qm3d, m) {
         return j.dump();
       },
       py::arg("scores"), py::arg("mos"), py::arg("ci95"), py::arg("bootstrap"), py::arg("seed"));
+}
 
+// Several metrics on one set of stimuli (the protocol, Krasula's pairs), and model files.
+void bind_evaluate_metrics(py::module_& m) {
   m.def(
       "evaluate_metrics",
       [](const std::vector<std::string>& names, const std::vector<std::vector<double>>& scores,
@@ -600,34 +625,25 @@ PYBIND11_MODULE(_qm3d, m) {
          const std::vector<std::size_t>& second, const std::vector<int>& label,
          const std::vector<std::string>& groups, std::size_t bootstrap, std::uint64_t seed,
          const std::string& mapping) {
+        const OrientationRequest request{lower_is_better, orientation, "lower_is_better",
+                                         "orientation"};
         std::vector<MetricScores> metrics;
         for (std::size_t i = 0; i < names.size(); ++i) {
-          MetricScores ms{names[i], scores.at(i), true, ""};
-          const auto& lower = lower_is_better;
-          const auto known = registry().column_orientation(names[i]);
-          if (std::find(lower.begin(), lower.end(), names[i]) != lower.end()) {
-            ms.higher_is_better = false;
-            ms.orientation_source = "lower_is_better";
-          } else if (orientation != "auto") {
-            ms.higher_is_better = orientation == "quality";
-            ms.orientation_source = "orientation";
-          } else if (known) {
-            ms.higher_is_better = known->first;
-            ms.orientation_source = known->second;
-          } else {
-            ms.orientation_source = "assumed: not a registered metric";
-          }
-          metrics.push_back(std::move(ms));
+          const Orientation r = orient(default_registry(), request, {names[i], "", names[i]},
+                                       Fallback::column_name_then_quality);
+          metrics.push_back({names[i], scores.at(i), *r.higher_is_better, r.source});
         }
-        SubjectiveData subjective{mos, ci95, std::nullopt};
-        if (labels == "sd") subjective.pairs = label_pairs_j149(mos, sd, n, groups);
-        if (labels == "raw") subjective.pairs = label_pairs_raw(raw, groups);
+        PairLabelSource source;
+        if (labels == "sd") source = {PairLabelSource::Kind::sd, sd, n, {}, {}};
+        if (labels == "raw") source = {PairLabelSource::Kind::raw, {}, {}, raw, {}};
         if (labels == "pairs") {
-          PairLabels p;
-          p.rule = "given";
-          for (std::size_t k = 0; k < label.size(); ++k) p.add(first.at(k), second.at(k), label[k]);
-          subjective.pairs = std::move(p);
+          source.kind = PairLabelSource::Kind::given;
+          source.given.rule = "given";
+          for (std::size_t k = 0; k < label.size(); ++k) {
+            source.given.add(first.at(k), second.at(k), label[k]);
+          }
         }
+        const SubjectiveData subjective{mos, ci95, label_pairs(mos, source, groups)};
         ProtocolOptions o;
         o.evaluation.bootstrap = bootstrap;
         o.evaluation.seed = seed;
@@ -644,13 +660,25 @@ PYBIND11_MODULE(_qm3d, m) {
       py::arg("raw"), py::arg("first"), py::arg("second"), py::arg("label"), py::arg("groups"),
       py::arg("bootstrap"), py::arg("seed"), py::arg("mapping") = "logistic4");
 
-  // Called at interpreter exit (python/qm3d/__init__.py): metric calls interrupted by Ctrl-C
-  // finish their current stage on their own threads; they must be gone before Python is.
-  m.def("wait_for_interrupted_calls", [] {
-    py::gil_scoped_release release;
-    AbandonedWorkers::instance().wait_all();
-  });
-
   m.def("load_model", [](const std::string& path) { return model_to_json(read_model(path)); },
         py::arg("path"));
+}
+
+}  // namespace qm3d::python
+
+PYBIND11_MODULE(_qm3d, m) {
+  using namespace qm3d;
+  using namespace qm3d::python;
+  m.doc() = "qm3d's compiled core; use the qm3d package, not this module.";
+  m.attr("__version__") = kVersion;
+  m.attr("__commit__") = git_commit();
+  bind_errors_and_metrics(m);
+  bind_inputs(m);
+  bind_results(m);
+  bind_scoring(m);
+  bind_sampling(m);
+  bind_render_views(m);
+  bind_image_quality(m);
+  bind_evaluation(m);
+  bind_evaluate_metrics(m);
 }

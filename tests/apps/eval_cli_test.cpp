@@ -14,13 +14,14 @@
 #include <set>
 #include <sstream>
 
-#include "qm3d/common/evaluation.h"
+#include "qm3d/evaluation/evaluation.h"
 #include "qm3d/common/pooling.h"
 #include "cli_runner.h"
 #include "test_paths.h"
 
 namespace qm3d {
 namespace {
+using namespace qm3d::evaluation;  // the evaluation toolkit (qm3d/evaluation/)
 
 namespace fs = std::filesystem;
 using test::CliRun;

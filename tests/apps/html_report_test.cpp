@@ -1,7 +1,7 @@
-// apps/html_report.{h,cpp}: the parts of the report (base64, histogram, hottest regions,
+// report/ html_report.{h,cpp}: the parts of the report (base64, histogram, hottest regions,
 // decimation, option parsing, file names) and the data a written report holds. The page itself is
 // checked in a browser by tests/report/test_report.sh.
-#include "html_report.h"
+#include "qm3d/report/html_report.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -15,7 +15,7 @@
 
 #include "qm3d/common/error.h"
 
-namespace qm3d::app {
+namespace qm3d::report {
 namespace {
 
 namespace fs = std::filesystem;
@@ -299,4 +299,4 @@ TEST(HtmlReport, IndexOrdersAQualityLowestFirst) {
 }
 
 }  // namespace
-}  // namespace qm3d::app
+}  // namespace qm3d::report

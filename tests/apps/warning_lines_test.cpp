@@ -19,23 +19,13 @@
 #include "qm3d/pointcloud/cloud_io.h"
 #include "qm3d/pointcloud/metrics.h"
 #include "qm3d/render/ibsm.h"
+#include "qm3d/scoring/registry.h"
 #include "test_paths.h"
 
 namespace qm3d {
 namespace {
 
 namespace fs = std::filesystem;
-
-const Registry& all_metrics() {
-  static const Registry r = [] {
-    Registry reg;
-    mesh::register_metrics(reg);
-    pointcloud::register_metrics(reg);
-    render::register_metrics(reg);
-    return reg;
-  }();
-  return r;
-}
 
 struct Pair {
   std::string ref, dist;
@@ -98,7 +88,7 @@ TEST_F(WarningLines, EveryMetricOnTheBundledPairsWarnsInLinesOfAtMost160Characte
   write_voxel_scale(test::source_dir() / kClouds.ref, voxel.ref);
   write_voxel_scale(test::source_dir() / kClouds.dist, voxel.dist);
   std::size_t runs = 0, warnings = 0;
-  for (const MetricSpec& spec : all_metrics().metrics()) {
+  for (const MetricSpec& spec : scoring::default_registry().metrics()) {
     for (const Pair& p : pairs_of(spec, voxel)) {
       const std::string what = spec.name + " " + p.ref + " " + p.dist;
       const test::CliRun r = test::run_qm3d(
