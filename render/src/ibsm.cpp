@@ -11,26 +11,45 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <ostream>
 #include <stdexcept>
 
 #include "qm3d/common/error.h"
-#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/large_arrays.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/texture.h"
 #include "qm3d/render/icid.h"
 #include "qm3d/render/image_quality.h"
+#include "raster_bands.h"
+#include "ssim_stream.h"
 
 namespace qm3d::render {
 
 const std::vector<std::string>& ibsm_value_names() {
-  static const std::vector<std::string> names = {
-      "r_mse",   "g_mse",   "b_mse",   "rgb_mse", "y_mse",    "u_mse",    "v_mse",
-      "yuv_mse", "geo_mse", "r_psnr",  "g_psnr",  "b_psnr",   "rgb_psnr", "y_psnr",
-      "u_psnr",  "v_psnr",  "yuv_psnr", "geo_psnr", "unmatched_pixel_percentage", "ssim",
-      "ms_ssim"};
+  static const std::vector<std::string> names = {"r_mse",
+                                                 "g_mse",
+                                                 "b_mse",
+                                                 "rgb_mse",
+                                                 "y_mse",
+                                                 "u_mse",
+                                                 "v_mse",
+                                                 "yuv_mse",
+                                                 "geo_mse",
+                                                 "r_psnr",
+                                                 "g_psnr",
+                                                 "b_psnr",
+                                                 "rgb_psnr",
+                                                 "y_psnr",
+                                                 "u_psnr",
+                                                 "v_psnr",
+                                                 "yuv_psnr",
+                                                 "geo_psnr",
+                                                 "unmatched_pixel_percentage",
+                                                 "ssim",
+                                                 "ms_ssim"};
   return names;
 }
 
@@ -43,28 +62,17 @@ Float3 yuv_of(float r, float g, float b) {
           0.5000F * r - 0.4542F * g - 0.0458F * b + 128.0F};
 }
 
-GreyImage luma_image(const View& v) {
-  GreyImage g;
-  g.width = v.width;
-  g.height = v.height;
-  reserve_with_huge_pages(g.values, static_cast<std::size_t>(v.width) * v.height);
-  g.values.resize(static_cast<std::size_t>(v.width) * v.height);
-  for (std::size_t i = 0; i < g.values.size(); ++i) {
-    g.values[i] = yuv_of(v.rgba[i * 4], v.rgba[i * 4 + 1], v.rgba[i * 4 + 2])[0];
-  }
-  return g;
-}
-
-/// Squared errors of the pixels both views cover; the counts (mmetric's steps 0, A, B).
-void add_pixel_errors(const View& a, const View& b, float depth_range, IbsmView& out) {
-  const std::size_t n = a.depth.size();
+/// Squared errors of the pixels both views cover; the counts (mmetric's steps 0, A, B), over n
+/// pixels (a band; the sums run in pixel order, band after band).
+void add_pixel_errors(const std::uint8_t* rgba_a, const float* depth_a, const std::uint8_t* rgba_b,
+                      const float* depth_b, std::size_t n, float depth_range, IbsmView& out) {
   for (std::size_t i = 0; i < n; ++i) {
-    const bool in_a = a.rgba[i * 4 + 3] != 0, in_b = b.rgba[i * 4 + 3] != 0;
+    const bool in_a = rgba_a[i * 4 + 3] != 0, in_b = rgba_b[i * 4 + 3] != 0;
     if (in_a != in_b) ++out.unmatched;
     if (!(in_a && in_b)) continue;
     ++out.matched;
-    const float ra = a.rgba[i * 4], ga = a.rgba[i * 4 + 1], ba = a.rgba[i * 4 + 2];
-    const float rb = b.rgba[i * 4], gb = b.rgba[i * 4 + 1], bb = b.rgba[i * 4 + 2];
+    const float ra = rgba_a[i * 4], ga = rgba_a[i * 4 + 1], ba = rgba_a[i * 4 + 2];
+    const float rb = rgba_b[i * 4], gb = rgba_b[i * 4 + 1], bb = rgba_b[i * 4 + 2];
     const Float3 rgb_a{ra, ga, ba}, rgb_b{rb, gb, bb};
     const Float3 yuv_a = yuv_of(ra, ga, ba), yuv_b = yuv_of(rb, gb, bb);
     for (int c = 0; c < 3; ++c) {
@@ -73,38 +81,90 @@ void add_pixel_errors(const View& a, const View& b, float depth_range, IbsmView&
       out.rgb_sse[c] += d_rgb * d_rgb;
       out.yuv_sse[c] += d_yuv * d_yuv;
     }
-    const double d = (static_cast<double>(a.depth[i]) - static_cast<double>(b.depth[i])) * 255.0 /
-                     depth_range;
+    const double d =
+        (static_cast<double>(depth_a[i]) - static_cast<double>(depth_b[i])) * 255.0 / depth_range;
     out.depth_sse += d * d;
   }
 }
 
-std::vector<std::uint8_t> both_covered(const View& a, const View& b) {
-  std::vector<std::uint8_t> mask(a.depth.size());
-  for (std::size_t i = 0; i < mask.size(); ++i) {
-    mask[i] = a.rgba[i * 4 + 3] != 0 && b.rgba[i * 4 + 3] != 0;
-  }
-  return mask;
+std::size_t drawn(const std::uint8_t* rgba, std::size_t n) {
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) count += rgba[i * 4 + 3] != 0;
+  return count;
 }
 
-IbsmView compare_views(const View& a, const View& b, const Float3& direction, bool image_quality) {
-  IbsmView out;
-  out.direction = direction;
-  out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
-  if (a.drawn_pixels() == 0 || b.drawn_pixels() == 0) {
-    out.left_out = true;
+/// Rows per band: both views' bands (8 bytes a pixel each) stay in the cache.
+constexpr int kBandRows = 64;
+
+/// One thread's view comparison: both objects drawn band by band into the same buffers, each
+/// band's errors summed and its rows (luma, mask) fed to the streaming SSIM, so that a thread
+/// holds a few bands rather than two views.
+class ViewScorer {
+ public:
+  IbsmView score(const RenderModel& ref, const RenderModel& dist, const Frame& frame,
+                 const Float3& direction, const IbsmOptions& o) {
+    const RasterOptions ro{o.resolution, o.culling, o.lighting};
+    ref_.prepare(ref, frame, direction, ro, kBandRows);
+    dist_.prepare(dist, frame, direction, ro, kBandRows);
+    const int w = ref_.width();
+    const std::size_t band_pixels = static_cast<std::size_t>(w) * kBandRows;
+    for (auto* v : {&rgba_a_, &rgba_b_}) v->resize(4 * band_pixels);
+    for (auto* v : {&depth_a_, &depth_b_}) v->resize(band_pixels);
+    for (auto* v : {&luma_a_, &luma_b_}) v->resize(static_cast<std::size_t>(w));
+    mask_.resize(static_cast<std::size_t>(w));
+    if (o.image_quality) ssim_.begin(w, ref_.height());
+    IbsmView out;
+    out.direction = direction;
+    out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
+    std::size_t drawn_a = 0, drawn_b = 0;
+    for (int band = 0; band < ref_.bands(); ++band) {
+      ref_.draw(band, rgba_a_.data(), depth_a_.data());
+      dist_.draw(band, rgba_b_.data(), depth_b_.data());
+      const std::size_t n = static_cast<std::size_t>(w) * ref_.band_rows(band);
+      drawn_a += drawn(rgba_a_.data(), n);
+      drawn_b += drawn(rgba_b_.data(), n);
+      add_pixel_errors(rgba_a_.data(), depth_a_.data(), rgba_b_.data(), depth_b_.data(), n,
+                       dist_.depth_range(), out);
+      if (o.image_quality) push_rows(w, ref_.band_rows(band));
+    }
+    if (drawn_a == 0 || drawn_b == 0) {
+      IbsmView empty;
+      empty.direction = direction;
+      empty.ssim = empty.ms_ssim = std::numeric_limits<double>::quiet_NaN();
+      empty.left_out = true;
+      return empty;
+    }
+    if (o.image_quality && out.matched > 0) {
+      const SsimScores q = ssim_.finish();
+      out.ssim = q.ssim;
+      out.ms_ssim = q.ms_ssim;
+    }
     return out;
   }
-  add_pixel_errors(a, b, b.depth_range, out);
-  if (image_quality && out.matched > 0) {
-    const GreyImage la = luma_image(a), lb = luma_image(b);
-    const std::vector<std::uint8_t> mask = both_covered(a, b);
-    const SsimScores q = masked_ssim_scores(la, lb, mask);
-    out.ssim = q.ssim;
-    out.ms_ssim = q.ms_ssim;
+
+ private:
+  /// The band's rows to the SSIM: the luma of each view (float, as mmetric's YUV) and the
+  /// pixels both cover.
+  void push_rows(int w, int rows) {
+    for (int y = 0; y < rows; ++y) {
+      const std::size_t r = static_cast<std::size_t>(y) * w;
+      for (int x = 0; x < w; ++x) {
+        const std::uint8_t* a = &rgba_a_[(r + x) * 4];
+        const std::uint8_t* b = &rgba_b_[(r + x) * 4];
+        luma_a_[x] = yuv_of(a[0], a[1], a[2])[0];
+        luma_b_[x] = yuv_of(b[0], b[1], b[2])[0];
+        mask_[x] = a[3] != 0 && b[3] != 0;
+      }
+      ssim_.push_row(luma_a_.data(), luma_b_.data(), mask_.data());
+    }
   }
-  return out;
-}
+
+  detail::BandRaster ref_, dist_;
+  std::vector<std::uint8_t> rgba_a_, rgba_b_, mask_;
+  std::vector<float> depth_a_, depth_b_;
+  std::vector<double> luma_a_, luma_b_;
+  detail::SsimStream ssim_;
+};
 
 /// Written as every other output (write_file_atomically): a full disk or a write error leaves
 /// no empty or truncated PNG behind and fails naming the file.
@@ -123,7 +183,8 @@ std::string view_file(int index, const char* which) {
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
-/// Renders and compares every view (views in parallel, each written to its own slot).
+/// Renders and compares every view (views in parallel, each written to its own slot; one
+/// ViewScorer per thread, its buffers reused from view to view).
 std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderModel& dist,
                                         const Frame& frame, const std::vector<Float3>& dirs,
                                         const IbsmOptions& o) {
@@ -131,16 +192,18 @@ std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderMode
   std::vector<std::exception_ptr> errors(dirs.size());
   const RasterOptions ro{o.resolution, o.culling, o.lighting};
   const int n = static_cast<int>(dirs.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(o.threads))
+  const int threads = std::max(1, std::min(thread_count(o.threads), n));
+  std::vector<std::unique_ptr<ViewScorer>> scorers(static_cast<std::size_t>(threads));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int i = 0; i < n; ++i) {
     try {
-      const View a = render_view(ref, frame, dirs[i], ro);
-      const View b = render_view(dist, frame, dirs[i], ro);
       if (!o.save_views.empty()) {
-        write_png(o.save_views / view_file(i, "reference"), a);
-        write_png(o.save_views / view_file(i, "distorted"), b);
+        write_png(o.save_views / view_file(i, "reference"), render_view(ref, frame, dirs[i], ro));
+        write_png(o.save_views / view_file(i, "distorted"), render_view(dist, frame, dirs[i], ro));
       }
-      out[i] = compare_views(a, b, dirs[i], o.image_quality);
+      auto& scorer = scorers[static_cast<std::size_t>(omp_get_thread_num())];
+      if (!scorer) scorer = std::make_unique<ViewScorer>();
+      out[i] = scorer->score(ref, dist, frame, dirs[i], o);
     } catch (...) {
       errors[i] = std::current_exception();
     }
@@ -151,7 +214,9 @@ std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderMode
   return out;
 }
 
-double clipped_psnr(double mse) { return std::min(kPsnrClip, 10.0 * std::log10((255.0 * 255.0) / mse)); }
+double clipped_psnr(double mse) {
+  return std::min(kPsnrClip, 10.0 * std::log10((255.0 * 255.0) / mse));
+}
 
 /// mmetric's pooling: sums over the views, / matched pixels, PSNRs clipped.
 NamedValues pooled_values(const std::vector<IbsmView>& views, std::size_t& matched_out) {
@@ -187,7 +252,8 @@ NamedValues pooled_values(const std::vector<IbsmView>& views, std::size_t& match
   for (int k = 0; k < 9; ++k) out.emplace_back(names[9 + k], clipped_psnr(mse[k]));
   out.emplace_back("unmatched_pixel_percentage", 100.0 * static_cast<double>(unmatched) / m);
   if (ssim_views > 0) out.emplace_back("ssim", ssim_sum / static_cast<double>(ssim_views));
-  if (ms_ssim_views > 0) out.emplace_back("ms_ssim", ms_ssim_sum / static_cast<double>(ms_ssim_views));
+  if (ms_ssim_views > 0)
+    out.emplace_back("ms_ssim", ms_ssim_sum / static_cast<double>(ms_ssim_views));
   return out;
 }
 
@@ -197,7 +263,9 @@ nlohmann::json view_details(const IbsmView& v) {
   j["left_out"] = v.left_out;
   j["matched_pixels"] = v.matched;
   j["unmatched_pixels"] = v.unmatched;
-  auto finite_or_null = [](double x) { return std::isnan(x) ? nlohmann::json() : nlohmann::json(x); };
+  auto finite_or_null = [](double x) {
+    return std::isnan(x) ? nlohmann::json() : nlohmann::json(x);
+  };
   const double m = static_cast<double>(v.matched);
   const double yuv_mse = v.matched ? (v.yuv_sse[0] * 6 + v.yuv_sse[1] + v.yuv_sse[2]) / 8 / m : NAN;
   j["yuv_psnr"] = finite_or_null(v.matched ? clipped_psnr(yuv_mse) : NAN);
@@ -269,8 +337,7 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   const std::string far = float32_precision_warning(
       Vec3{c[0] - half, c[1] - half, c[2] - half}, Vec3{c[0] + half, c[1] + half, c[2] + half},
       2.0 * half / options.resolution, "pixel size",
-      "ibsm: " + reference_name + ", " + distorted_name,
-      "mmetric's renderer");
+      "ibsm: " + reference_name + ", " + distorted_name, "mmetric's renderer");
   if (!far.empty()) r.warnings.push_back(far);
   std::size_t matched = 0;
   NamedValues values = pooled_values(views, matched);
@@ -301,8 +368,8 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   nlohmann::json per_view = nlohmann::json::array();
   for (const IbsmView& v : views) per_view.push_back(view_details(v));
   r.details["views"] = per_view;
-  r.text_note = "YUV PSNR " + std::to_string(d.score) + " dB over " + std::to_string(dirs.size()) +
-                " views";
+  r.text_note =
+      "YUV PSNR " + std::to_string(d.score) + " dB over " + std::to_string(dirs.size()) + " views";
   r.provenance.version = kVersion;
   r.provenance.reference = reference_name;
   r.provenance.distorted = distorted_name;
@@ -378,19 +445,19 @@ std::vector<Float3> view_directions(const IbsmOptions& options) {
 IbsmOptions ibsm_options(const OptionValues& v, const RunOptions& run) {
   IbsmOptions o;
   static_cast<RunOptions&>(o) = run;
-  o.layout = v.at("layout").get<std::string>() == "cmdm18" ? ViewLayout::kCmdm18
-                                                            : ViewLayout::kFibonacci;
+  o.layout =
+      v.at("layout").get<std::string>() == "cmdm18" ? ViewLayout::kCmdm18 : ViewLayout::kFibonacci;
   o.views = v.at("views").get<int>();
   o.resolution = v.at("resolution").get<int>();
   const nlohmann::json& r = v.at("rotation");
   o.rotation_deg = {r.at(0).get<float>(), r.at(1).get<float>(), r.at(2).get<float>()};
   o.culling = !v.at("no_culling").get<bool>();
-  o.lighting = v.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight
-                                                                   : Lighting::kUnlit;
+  o.lighting =
+      v.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight : Lighting::kUnlit;
   o.image_quality = !v.at("no_ssim").get<bool>();
   o.splats.size = v.at("splat_size").get<double>();
-  o.splats.shape = v.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc
-                                                                     : SplatShape::kSquare;
+  o.splats.shape =
+      v.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc : SplatShape::kSquare;
   o.save_views = v.at("save_views").get<std::string>();
   return o;
 }
@@ -418,10 +485,13 @@ std::vector<ViewPair> result_view_pairs(const MetricResult& result, const Input&
   const nlohmann::json& d = result.details;
   const nlohmann::json& render = d.at("render");
   SplatOptions ref_splats, dist_splats;
-  ref_splats.shape = dist_splats.shape =
-      render.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc : SplatShape::kSquare;
-  if (d.contains("splat_size_reference")) ref_splats.size = d.at("splat_size_reference").get<double>();
-  if (d.contains("splat_size_distorted")) dist_splats.size = d.at("splat_size_distorted").get<double>();
+  ref_splats.shape = dist_splats.shape = render.at("splat_shape").get<std::string>() == "disc"
+                                             ? SplatShape::kDisc
+                                             : SplatShape::kSquare;
+  if (d.contains("splat_size_reference"))
+    ref_splats.size = d.at("splat_size_reference").get<double>();
+  if (d.contains("splat_size_distorted"))
+    dist_splats.size = d.at("splat_size_distorted").get<double>();
   const RenderModel a = model_of(reference, ref_splats);
   const RenderModel b = model_of(distorted, dist_splats);
   Frame frame;
@@ -450,7 +520,8 @@ MetricSpec ibsm_spec() {
   MetricSpec s;
   s.name = "ibsm";
   s.title = "IBSM";
-  s.reproduces = "MPEG mmetric 1.1.7 compare --mode ibsm, sw_raster (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
+  s.reproduces =
+      "MPEG mmetric 1.1.7 compare --mode ibsm, sw_raster (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
   s.summary =
       "Image-based quality from rendered views (mmetric's IBSM: PSNR of RGB, YUV and depth over "
       "the pixels both objects cover, plus SSIM / MS-SSIM of the luma); meshes and point clouds "
@@ -473,7 +544,11 @@ MetricSpec ibsm_spec() {
   }
   s.options = {
       {"views", "Views on a Fibonacci sphere (mmetric --ibsmCameraCount)", 16, {}, 2, 4096},
-      {"resolution", "Width = height of each view, pixels (mmetric --ibsmResolution)", 2048, {}, 16,
+      {"resolution",
+       "Width = height of each view, pixels (mmetric --ibsmResolution)",
+       2048,
+       {},
+       16,
        16384},
       {"rotation",
        "Rotation of the views: polar angle, azimuth, magnitude in degrees, applied when the "
@@ -483,20 +558,28 @@ MetricSpec ibsm_spec() {
        "Where the cameras are: fibonacci = --views directions on mmetric's Fibonacci sphere; "
        "cmdm18 = the 18 directions of the CMDM report's image metrics (6 axes + 12 plane "
        "diagonals)",
-       "fibonacci", {"fibonacci", "cmdm18"}},
+       "fibonacci",
+       {"fibonacci", "cmdm18"}},
       {"no_culling", "Draw back faces too (mmetric --ibsmDisableCulling)", false},
       {"lighting",
        "none = the colours themselves (mmetric's); headlight = meshes shaded by a light at the "
        "camera, colour x (0.4 + 0.6 n.v) (mmetric's lit shader's constants)",
-       "none", {"none", "headlight"}},
+       "none",
+       {"none", "headlight"}},
       {"no_ssim", "Leave out SSIM and MS-SSIM (faster)", false},
       {"splat_size",
        "Size of a point cloud's splats (diameter or side), world units; 0 = 6 x the median "
        "nearest-point spacing",
-       0.0, {}, 0, 1e300},
-      {"splat_shape", "Shape of a point cloud's splats: disc (of diameter --splat-size) or square",
-       "disc", {"disc", "square"}},
-      {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)", ""},
+       0.0,
+       {},
+       0,
+       1e300},
+      {"splat_shape",
+       "Shape of a point cloud's splats: disc (of diameter --splat-size) or square",
+       "disc",
+       {"disc", "square"}},
+      {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)",
+       ""},
   };
   s.run = run_ibsm;
   return s;

@@ -18,6 +18,7 @@
 #include "float_ops.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/large_arrays.h"
+#include "raster_bands.h"
 
 namespace qm3d::render {
 
@@ -188,16 +189,17 @@ struct PointsAdaptor {
     return false;
   }
 };
-using PointsTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>, PointsAdaptor, 3, std::uint32_t>;
+using PointsTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
+                                        PointsAdaptor, 3, std::uint32_t>;
 
 /// The median distance of a point to its nearest point at a distance > 0, over an evenly
 /// spaced subset of the points; 0 when no point has such a neighbour.
 double median_spacing(const std::vector<Float3>& points) {
   const PointsAdaptor adaptor{points};
   const PointsTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
-  const std::size_t step = std::max<std::size_t>(1, (points.size() + kSpacingSamples - 1) /
-                                                        kSpacingSamples);
+  const std::size_t step =
+      std::max<std::size_t>(1, (points.size() + kSpacingSamples - 1) / kSpacingSamples);
   constexpr std::size_t kNeighbours = 8;  // enough to pass a few coincident points
   std::vector<double> spacing;
   for (std::size_t i = 0; i < points.size(); i += step) {
@@ -228,7 +230,8 @@ RenderModel cloud_model(const ColoredCloud& cloud, const SplatOptions& options) 
     keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
     if (has_colors) {
       const Rgb& c = cloud.colors[i];
-      keys[i].col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g), mesh::mm_channel_255(c.b)};
+      keys[i].col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g),
+                     mesh::mm_channel_255(c.b)};
     }
   }
   std::sort(keys.begin(), keys.end(), key_less);
@@ -291,11 +294,13 @@ double box_ratio(const RenderModel& a, const RenderModel& b) {
 }
 
 std::vector<Float3> fibonacci_directions(int count, const Float3& rotation_deg) {
-  if (count < 2) throw std::invalid_argument("views: at least 2 (got " + std::to_string(count) + ")");
+  if (count < 2)
+    throw std::invalid_argument("views: at least 2 (got " + std::to_string(count) + ")");
   const bool rotate = rotation_deg[2] != 0.0f;
   M4 rot = detail::identity();
   if (rotate) {
-    constexpr float kRadPerDeg = static_cast<float>(0.01745329251994329576923690768489);  // glm::radians
+    constexpr float kRadPerDeg =
+        static_cast<float>(0.01745329251994329576923690768489);  // glm::radians
     const float inclination = rotation_deg[0] * kRadPerDeg;
     const float azimuth = rotation_deg[1] * kRadPerDeg;
     const float intrinsic = rotation_deg[2] * kRadPerDeg;
@@ -354,8 +359,8 @@ Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
   const M4 view = detail::look_at(eye, center, up);
   const M4 glob = detail::mul(detail::translation({ratio * radius, radius, 0}),
                               detail::scaling({1.0f, 1.0f, -1.0f}));
-  const M4 proj = detail::ortho(-ratio * radius, ratio * radius, -radius, radius, 0.0f,
-                                2.0f * radius);
+  const M4 proj =
+      detail::ortho(-ratio * radius, ratio * radius, -radius, radius, 0.0f, 2.0f * radius);
   const M4 model_view = detail::mul(view, detail::identity());
   Camera c;
   c.mvp = detail::mul(detail::mul(proj, glob), model_view);
@@ -371,16 +376,32 @@ Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
   return c;
 }
 
+/// Where a view is drawn: the rows [row0, row0 + rows) of a width x height image (a band, or
+/// the whole image); pixel (x, y) at index x + (y - row0) * width of rgba (4 bytes) and depth.
 struct Target {
-  int width, height;
+  int width, height, row0, rows;
   std::uint8_t* rgba;
   float* depth;
+  int last_row() const { return row0 + rows - 1; }
+  std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(x) +
+           static_cast<std::size_t>(y - row0) * static_cast<std::size_t>(width);
+  }
 };
+
+/// std::roundf (half away from zero) then int, inline: the shaders' colours are finite and far
+/// below 2^31, where a - trunc(a) is exact.
+int round_colour(float c) {
+  const float a = std::fabs(c);
+  const int t = static_cast<int>(a);
+  const int r = a - static_cast<float>(t) >= 0.5f ? t + 1 : t;
+  return c < 0 ? -r : r;
+}
 
 void write_pixel(const Target& t, std::size_t i, float depth, const float colour[3]) {
   t.depth[i] = depth;
   for (int c = 0; c < 3; ++c) {
-    t.rgba[i * 4 + c] = static_cast<std::uint8_t>(static_cast<int>(std::roundf(colour[c])));
+    t.rgba[i * 4 + c] = static_cast<std::uint8_t>(round_colour(colour[c]));
   }
   t.rgba[i * 4 + 3] = 255;
 }
@@ -394,10 +415,10 @@ F3 interpolate(const F3 v[3], float b0, float b1, float b2) {
 /// What colours a face's pixels: its corners' colours (ShaderCpv), a texture (ShaderMap) or red
 /// (ShaderRed), optionally lit by the headlight.
 struct FaceShader {
-  const F3* colour = nullptr;                  ///< 3 corner colours, 0..255
+  const F3* colour = nullptr;  ///< 3 corner colours, 0..255
   const mesh::TextureImage* texture = nullptr;
-  F3 uv[3];                                    ///< (u, v, 0) per corner
-  const F3* normal = nullptr;                  ///< 3 corner normals: the headlight is on
+  F3 uv[3];                    ///< (u, v, 0) per corner
+  const F3* normal = nullptr;  ///< 3 corner normals: the headlight is on
   F3 towards_camera;
   bool two_sided = false;
 
@@ -428,28 +449,40 @@ struct FaceShader {
   static constexpr float kDiffuse = 0.6f;  // _materialDiffuse (white light)
 };
 
-/// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
-/// writes each pixel at most once, so the order within a face does not matter).
-void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceShader& shader) {
-  float lo[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
-  float hi[2] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
-  const float clamp[2] = {static_cast<float>(t.width - 1), static_cast<float>(t.height - 1)};
+/// A face's pixel box as mmetric's rasterize loop bounds it: corners' screen positions,
+/// clamped to the image; rows and columns [int(lo), int(hi)].
+struct PixelBox {
+  float lo[2], hi[2];
+};
+PixelBox pixel_box(const F4 pts[3], int width, int height) {
+  PixelBox b{{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()},
+             {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}};
+  const float clamp[2] = {static_cast<float>(width - 1), static_cast<float>(height - 1)};
   for (int i = 0; i < 3; ++i) {
     const float p[2] = {pts[i].x / pts[i].w, pts[i].y / pts[i].w};
     for (int j = 0; j < 2; ++j) {
-      lo[j] = std::max(0.0f, std::min(lo[j], p[j]));
-      hi[j] = std::min(clamp[j], std::max(hi[j], p[j]));
+      b.lo[j] = std::max(0.0f, std::min(b.lo[j], p[j]));
+      b.hi[j] = std::min(clamp[j], std::max(b.hi[j], p[j]));
     }
   }
+  return b;
+}
+
+/// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
+/// writes each pixel at most once, so the order within a face does not matter), on the
+/// target's rows only (a pixel's values do not depend on which others are drawn).
+void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceShader& shader) {
+  const PixelBox box = pixel_box(pts, t.width, t.height);
   // u = cross((p2x - p0x, p1x - p0x, p0x - x), (p2y - p0y, p1y - p0y, p0y - y)).
   const float ax = pts[2].x - pts[0].x, ay = pts[1].x - pts[0].x;
   const float bx = pts[2].y - pts[0].y, by = pts[1].y - pts[0].y;
   const float uz = ax * by - bx * ay;
   const float z0 = clip[0].z, z1 = clip[1].z, z2 = clip[2].z;
   const float w0 = pts[0].w, w1 = pts[1].w, w2 = pts[2].w;
-  for (int y = static_cast<int>(lo[1]); y <= static_cast<int>(hi[1]); ++y) {
+  const int y_end = std::min(static_cast<int>(box.hi[1]), t.last_row());
+  for (int y = std::max(static_cast<int>(box.lo[1]), t.row0); y <= y_end; ++y) {
     const float bz = pts[0].y - static_cast<float>(y);
-    for (int x = static_cast<int>(lo[0]); x <= static_cast<int>(hi[0]); ++x) {
+    for (int x = static_cast<int>(box.lo[0]); x <= static_cast<int>(box.hi[0]); ++x) {
       const float az = pts[0].x - static_cast<float>(x);
       const float ux = ay * bz - by * az;
       const float uy = az * bx - bz * ax;
@@ -457,49 +490,12 @@ void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceSha
       const float c0 = s0 / w0, c1 = s1 / w1, c2 = s2 / w2;
       const float depth = z0 * c0 + z1 * c1 + z2 * c2;
       if (std::isnan(depth)) continue;
-      const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
+      const std::size_t i = t.index(x, y);
       if (s0 < 0 || s1 < 0 || s2 < 0 || depth <= t.depth[i]) continue;
       float rgb[3];
       shader.shade(c0, c1, c2, rgb);
       write_pixel(t, i, depth, rgb);
     }
-  }
-}
-
-void draw_mesh(const Target& t, const RenderModel& m, const Camera& cam,
-               const RasterOptions& options) {
-  const bool coloured = !m.colors_255.empty();
-  const bool lit = options.lighting == Lighting::kHeadlight && m.normals.size() == m.positions.size();
-  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-    const Triangle& tri = m.triangles[f];
-    F4 clip[3];
-    for (int k = 0; k < 3; ++k) {
-      const Float3& p = m.positions[tri[k]];
-      clip[k] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
-    }
-    if (options.culling) {  // clockwise faces culled (mmetric's default cwCulling)
-      const F3 e1{clip[1].x - clip[0].x, clip[1].y - clip[0].y, clip[1].z - clip[0].z};
-      const F3 e2{clip[2].x - clip[0].x, clip[2].y - clip[0].y, clip[2].z - clip[0].z};
-      if (detail::cross(e1, e2).z <= 0) continue;
-    }
-    const F4 pts[3] = {detail::mul(cam.viewport, clip[0]), detail::mul(cam.viewport, clip[1]),
-                       detail::mul(cam.viewport, clip[2])};
-    FaceShader shader;
-    F3 colour[3], normal[3];
-    if (m.is_textured()) {
-      shader.texture = &(*m.textures)[m.triangle_texture[f]];
-      for (int k = 0; k < 3; ++k) shader.uv[k] = {m.uvs[tri[k]][0], m.uvs[tri[k]][1], 0};
-    } else if (coloured) {
-      for (int k = 0; k < 3; ++k) colour[k] = f3(m.colors_255[tri[k]]);
-      shader.colour = colour;
-    }
-    if (lit) {
-      for (int k = 0; k < 3; ++k) normal[k] = f3(m.normals[tri[k]]);
-      shader.normal = normal;
-      shader.towards_camera = cam.towards_camera;
-      shader.two_sided = !options.culling;
-    }
-    draw_face(t, clip, pts, shader);
   }
 }
 
@@ -509,7 +505,7 @@ struct Splat {
   int x0, y0, x1, y1;
 };
 
-Splat splat_of(const Float3& p, const Camera& cam, const Target& t, float half_px) {
+Splat splat_of(const Float3& p, const Camera& cam, int width, int height, float half_px) {
   const F4 clip = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
   const F4 pt = detail::mul(cam.viewport, clip);
   Splat s;
@@ -518,48 +514,157 @@ Splat splat_of(const Float3& p, const Camera& cam, const Target& t, float half_p
   s.depth = clip.z;
   s.x0 = static_cast<int>(std::max(0.0f, std::ceil(s.px - half_px)));
   s.y0 = static_cast<int>(std::max(0.0f, std::ceil(s.py - half_px)));
-  s.x1 = static_cast<int>(std::min(static_cast<float>(t.width - 1), std::floor(s.px + half_px)));
-  s.y1 = static_cast<int>(std::min(static_cast<float>(t.height - 1), std::floor(s.py + half_px)));
+  s.x1 = static_cast<int>(std::min(static_cast<float>(width - 1), std::floor(s.px + half_px)));
+  s.y1 = static_cast<int>(std::min(static_cast<float>(height - 1), std::floor(s.py + half_px)));
   return s;
 }
 
-/// Calls f(pixel index, squared screen distance to the centre) for each pixel of the footprint.
+/// Calls f(x, y, squared screen distance to the centre) for each pixel of the footprint in
+/// rows [row0, row_end].
 template <class F>
-void for_each_pixel(const Splat& s, const Target& t, float half_px, bool disc, F&& f) {
-  for (int y = s.y0; y <= s.y1; ++y) {
+void for_each_pixel(const Splat& s, int row0, int row_end, float half_px, bool disc, F&& f) {
+  for (int y = std::max(s.y0, row0); y <= std::min(s.y1, row_end); ++y) {
     const float dy = static_cast<float>(y) - s.py;
     for (int x = s.x0; x <= s.x1; ++x) {
       const float dx = static_cast<float>(x) - s.px;
       const float d2 = dx * dx + dy * dy;
       if (disc && d2 > half_px * half_px) continue;
-      f(static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width, d2);
+      f(x, y, d2);
     }
   }
 }
 
-/// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
-/// Botsch et al. 2005): pass 1 finds the nearest depth that footprints of twice the splat size
-/// reach (on a half-resolution buffer); pass 2 colours a pixel with the point whose centre is nearest to it among the points
-/// within two splat sizes of that front depth (ties: the first in canonical order; two sizes
-/// let a surface tilted up to about 60 degrees through). So the back
-/// of an object does not show through the gaps between front splats (a gap stays empty), and
-/// colours are not blocks of splat size.
-void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
-  const float half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
-  const bool disc = m.splat_shape == SplatShape::kDisc;
+/// Items (faces or splats) listed per band of rows, in their order (a pixel sees the items that
+/// reach it in the order a whole-image pass would: the same ties).
+struct Bins {
+  std::vector<std::uint32_t> start, items;
+  /// rows(i) = {first, last} row of item i (first > last: none).
+  template <class Rows>
+  void fill(std::size_t count, int band_rows, int bands, Rows rows) {
+    start.assign(static_cast<std::size_t>(bands) + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::array<int, 2> r = rows(i);
+        if (r[0] > r[1]) continue;
+        for (int b = r[0] / band_rows; b <= r[1] / band_rows; ++b) {
+          if (pass == 0) {
+            ++start[static_cast<std::size_t>(b) + 1];
+          } else {
+            items[next[static_cast<std::size_t>(b)]++] = static_cast<std::uint32_t>(i);
+          }
+        }
+      }
+      if (pass == 0) {
+        for (int b = 0; b < bands; ++b) start[b + 1] += start[b];
+        items.resize(start.back());
+      }
+    }
+  }
+};
+
+}  // namespace
+
+namespace detail {
+
+/// One model in one view (BandRaster's state): the camera, the vertices' clip coordinates
+/// (meshes) or the splats and the front depths of pass 1 (clouds), the items per band.
+struct BandRaster::State {
+  const RenderModel* model = nullptr;
+  RasterOptions options;
+  Camera cam;
+  int width = 0, height = 0, band_rows = 0, bands = 0;
+  Bins bins;
+  std::vector<F4> clip;       // meshes: per vertex
+  std::vector<Splat> splats;  // clouds
+  std::vector<float> front, nearest;
+  int w2 = 0;
+  float half_px = 0, epsilon = 0;
+
+  F4 screen(std::uint32_t v) const { return detail::mul(cam.viewport, clip[v]); }
+  void prepare_mesh();
+  void draw_mesh(const Target& t) const;
+  void prepare_splats();
+  void draw_splats(const Target& t);
+};
+
+/// The faces not culled (clockwise faces culled: mmetric's default cwCulling), by rows.
+void BandRaster::State::prepare_mesh() {
+  const RenderModel& m = *model;
+  clip.resize(m.positions.size());
+  for (std::size_t v = 0; v < clip.size(); ++v) {
+    const Float3& p = m.positions[v];
+    clip[v] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
+  }
+  bins.fill(m.triangles.size(), band_rows, bands, [&](std::size_t f) -> std::array<int, 2> {
+    const Triangle& tri = m.triangles[f];
+    const F4 c[3] = {clip[tri[0]], clip[tri[1]], clip[tri[2]]};
+    if (options.culling) {
+      const F3 e1{c[1].x - c[0].x, c[1].y - c[0].y, c[1].z - c[0].z};
+      const F3 e2{c[2].x - c[0].x, c[2].y - c[0].y, c[2].z - c[0].z};
+      if (detail::cross(e1, e2).z <= 0) return {1, 0};
+    }
+    const F4 pts[3] = {screen(tri[0]), screen(tri[1]), screen(tri[2])};
+    const PixelBox box = pixel_box(pts, width, height);
+    const int lo = std::max(static_cast<int>(box.lo[1]), 0);
+    const int hi = std::min(static_cast<int>(box.hi[1]), height - 1);
+    return {lo, hi};
+  });
+}
+
+void BandRaster::State::draw_mesh(const Target& t) const {
+  const RenderModel& m = *model;
   const bool coloured = !m.colors_255.empty();
+  const bool lit =
+      options.lighting == Lighting::kHeadlight && m.normals.size() == m.positions.size();
+  const std::size_t band = static_cast<std::size_t>(t.row0 / band_rows);
+  for (std::size_t k = bins.start[band]; k < bins.start[band + 1]; ++k) {
+    const std::uint32_t f = bins.items[k];
+    const Triangle& tri = m.triangles[f];
+    const F4 c[3] = {clip[tri[0]], clip[tri[1]], clip[tri[2]]};
+    const F4 pts[3] = {screen(tri[0]), screen(tri[1]), screen(tri[2])};
+    FaceShader shader;
+    F3 colour[3], normal[3];
+    if (m.is_textured()) {
+      shader.texture = &(*m.textures)[m.triangle_texture[f]];
+      for (int i = 0; i < 3; ++i) shader.uv[i] = {m.uvs[tri[i]][0], m.uvs[tri[i]][1], 0};
+    } else if (coloured) {
+      for (int i = 0; i < 3; ++i) colour[i] = f3(m.colors_255[tri[i]]);
+      shader.colour = colour;
+    }
+    if (lit) {
+      for (int i = 0; i < 3; ++i) normal[i] = f3(m.normals[tri[i]]);
+      shader.normal = normal;
+      shader.towards_camera = cam.towards_camera;
+      shader.two_sided = !options.culling;
+    }
+    draw_face(t, c, pts, shader);
+  }
+}
+
+/// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
+/// Botsch et al. 2005): pass 1 (here, over the whole view) finds the nearest depth that
+/// footprints of twice the splat size reach (on a half-resolution buffer); pass 2 (draw_splats,
+/// band by band) colours a pixel with the point whose centre is nearest to it among the points
+/// within two splat sizes of that front depth (ties: the first in canonical order; two sizes
+/// let a surface tilted up to about 60 degrees through). So the back of an object does not show
+/// through the gaps between front splats (a gap stays empty), and colours are not blocks of
+/// splat size.
+void BandRaster::State::prepare_splats() {
+  const RenderModel& m = *model;
+  half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
+  const bool disc = m.splat_shape == SplatShape::kDisc;
   // Two splat sizes in depth units (the frame's diameter spans depth_range).
-  const float epsilon = 2 * m.splat_size * cam.depth_range * cam.pixels_per_unit /
-                        static_cast<float>(t.width);
+  epsilon = 2 * m.splat_size * cam.depth_range * cam.pixels_per_unit / static_cast<float>(width);
   // Pass 1 with footprints twice as wide, on a depth buffer of half the resolution (each of its
   // cells a 2 x 2 block of pixels, a quarter of the work): a gap between the front's splats
   // (where no point landed) still gets the front's depth, so that the back does not fill it.
-  const int w2 = (t.width + 1) / 2, h2 = (t.height + 1) / 2;
-  std::vector<float> front(static_cast<std::size_t>(w2) * h2, -FLT_MAX);
-  const Target coarse{w2, h2, nullptr, front.data()};
-  std::vector<Splat> splats(m.positions.size());
+  w2 = (width + 1) / 2;
+  const int h2 = (height + 1) / 2;
+  front.assign(static_cast<std::size_t>(w2) * h2, -FLT_MAX);
+  splats.resize(m.positions.size());
   for (std::size_t i = 0; i < splats.size(); ++i) {
-    splats[i] = splat_of(m.positions[i], cam, t, half_px);
+    splats[i] = splat_of(m.positions[i], cam, width, height, half_px);
     // In the coarse buffer's units: a cell's centre at (X + 1/4, Y + 1/4), the splat's radius
     // 2 half_px / 2 = half_px, grown by a cell's half diagonal so that a cell is reached when
     // any of its pixels is.
@@ -572,56 +677,111 @@ void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
     wide.x1 = static_cast<int>(std::min(static_cast<float>(w2 - 1), std::floor(wide.px + radius)));
     wide.y1 = static_cast<int>(std::min(static_cast<float>(h2 - 1), std::floor(wide.py + radius)));
     const float z = wide.depth;
-    for_each_pixel(wide, coarse, radius, disc, [&](std::size_t k, float) {
-      if (z > front[k]) front[k] = z;
+    for_each_pixel(wide, 0, h2 - 1, radius, disc, [&](int x, int y, float) {
+      float& f = front[static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * w2];
+      if (z > f) f = z;
     });
   }
-  const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.height);
-  std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
-  for (std::size_t i = 0; i < splats.size(); ++i) {
+  bins.fill(splats.size(), band_rows, bands, [&](std::size_t i) -> std::array<int, 2> {
+    return {splats[i].y0, splats[i].y1};
+  });
+}
+
+void BandRaster::State::draw_splats(const Target& t) {
+  const RenderModel& m = *model;
+  const bool disc = m.splat_shape == SplatShape::kDisc;
+  const bool coloured = !m.colors_255.empty();
+  nearest.assign(static_cast<std::size_t>(t.width) * t.rows,
+                 std::numeric_limits<float>::infinity());
+  const std::size_t band = static_cast<std::size_t>(t.row0 / band_rows);
+  for (std::size_t k = bins.start[band]; k < bins.start[band + 1]; ++k) {
+    const std::uint32_t i = bins.items[k];
     const Splat& s = splats[i];
     const float rgb[3] = {coloured ? m.colors_255[i][0] : 255.0f,
                           coloured ? m.colors_255[i][1] : 0.0f,
                           coloured ? m.colors_255[i][2] : 0.0f};
-    for_each_pixel(s, t, half_px, disc, [&](std::size_t k, float d2) {
-      const std::size_t x = k % static_cast<std::size_t>(t.width), y = k / t.width;
-      if (s.depth < front[(y / 2) * w2 + x / 2] - epsilon || !(d2 < nearest[k])) return;
-      nearest[k] = d2;
-      write_pixel(t, k, s.depth, rgb);
+    for_each_pixel(s, t.row0, t.last_row(), half_px, disc, [&](int x, int y, float d2) {
+      const std::size_t p = t.index(x, y);
+      const std::size_t f = static_cast<std::size_t>(y / 2) * w2 + static_cast<std::size_t>(x / 2);
+      if (s.depth < front[f] - epsilon || !(d2 < nearest[p])) return;
+      nearest[p] = d2;
+      write_pixel(t, p, s.depth, rgb);
     });
   }
 }
 
-}  // namespace
+}  // namespace detail
 
 std::vector<Float3> cmdm18_directions() {
   const float d = static_cast<float>(1 / std::sqrt(2.0));
-  return {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0},  {0, 0, 1},  {0, 0, -1},
-          {d, d, 0},  {d, -d, 0}, {-d, d, 0}, {-d, -d, 0}, {d, 0, d},  {d, 0, -d},
-          {-d, 0, d}, {-d, 0, -d}, {0, d, d}, {0, d, -d},  {0, -d, d}, {0, -d, -d}};
+  return {{1, 0, 0},  {-1, 0, 0},  {0, 1, 0},  {0, -1, 0},  {0, 0, 1},  {0, 0, -1},
+          {d, d, 0},  {d, -d, 0},  {-d, d, 0}, {-d, -d, 0}, {d, 0, d},  {d, 0, -d},
+          {-d, 0, d}, {-d, 0, -d}, {0, d, d},  {0, d, -d},  {0, -d, d}, {0, -d, -d}};
 }
 
-View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
-                 const RasterOptions& options) {
+namespace detail {
+
+BandRaster::BandRaster() : state_(std::make_unique<State>()) {}
+BandRaster::~BandRaster() = default;
+
+void BandRaster::prepare(const RenderModel& model, const Frame& frame, const Float3& direction,
+                         const RasterOptions& options, int band_rows) {
   if (options.resolution < 1) {
     throw std::invalid_argument("resolution: at least 1 pixel (got " +
                                 std::to_string(options.resolution) + ")");
   }
+  State& s = *state_;
+  s.model = &model;
+  s.options = options;
+  s.width = s.height = options.resolution;
+  s.band_rows = std::max(1, std::min(band_rows, s.height));
+  s.bands = (s.height + s.band_rows - 1) / s.band_rows;
+  s.cam = camera_for(frame, f3(direction), s.width, s.height);
+  if (model.is_cloud()) {
+    s.prepare_splats();
+  } else {
+    s.prepare_mesh();
+  }
+}
+
+int BandRaster::width() const { return state_->width; }
+int BandRaster::height() const { return state_->height; }
+int BandRaster::bands() const { return state_->bands; }
+int BandRaster::band_row0(int band) const { return band * state_->band_rows; }
+int BandRaster::band_rows(int band) const {
+  return std::min(state_->band_rows, state_->height - band_row0(band));
+}
+float BandRaster::depth_range() const { return state_->cam.depth_range; }
+
+void BandRaster::draw(int band, std::uint8_t* rgba, float* depth) {
+  State& s = *state_;
+  const Target t{s.width, s.height, band_row0(band), band_rows(band), rgba, depth};
+  const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.rows);
+  std::fill(rgba, rgba + 4 * n, std::uint8_t{0});
+  std::fill(depth, depth + n, -FLT_MAX);  // RendererSw's clear depth
+  if (s.model->is_cloud()) {
+    s.draw_splats(t);
+  } else {
+    s.draw_mesh(t);
+  }
+}
+
+}  // namespace detail
+
+View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
+                 const RasterOptions& options) {
+  detail::BandRaster raster;
+  raster.prepare(model, frame, direction, options, options.resolution);
   View v;
-  v.width = v.height = options.resolution;
+  v.width = raster.width();
+  v.height = raster.height();
   const std::size_t n = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
   reserve_with_huge_pages(v.rgba, n * 4);
   reserve_with_huge_pages(v.depth, n);
-  v.rgba.assign(n * 4, 0);
-  v.depth.assign(n, -FLT_MAX);  // RendererSw's clear depth
-  const Camera cam = camera_for(frame, f3(direction), v.width, v.height);
-  v.depth_range = cam.depth_range;
-  const Target t{v.width, v.height, v.rgba.data(), v.depth.data()};
-  if (model.is_cloud()) {
-    draw_splats(t, model, cam);
-  } else {
-    draw_mesh(t, model, cam, options);
-  }
+  v.rgba.resize(n * 4);
+  v.depth.resize(n);
+  v.depth_range = raster.depth_range();
+  raster.draw(0, v.rgba.data(), v.depth.data());
   return v;
 }
 
