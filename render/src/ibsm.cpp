@@ -55,43 +55,50 @@ const std::vector<std::string>& ibsm_value_names() {
 
 namespace {
 
+/// mmColor.h rgbToYuvBt709_256's Y, in float as mmetric.
+float luma_of(float r, float g, float b) { return 0.2126F * r + 0.7152F * g + 0.0722F * b; }
+
 /// mmColor.h rgbToYuvBt709_256, in float as mmetric.
 Float3 yuv_of(float r, float g, float b) {
-  return {0.2126F * r + 0.7152F * g + 0.0722F * b,
-          -0.1146F * r - 0.3854F * g + 0.5000F * b + 128.0F,
+  return {luma_of(r, g, b), -0.1146F * r - 0.3854F * g + 0.5000F * b + 128.0F,
           0.5000F * r - 0.4542F * g - 0.0458F * b + 128.0F};
 }
 
-/// Squared errors of the pixels both views cover; the counts (mmetric's steps 0, A, B), over n
-/// pixels (a band; the sums run in pixel order, band after band).
-void add_pixel_errors(const std::uint8_t* rgba_a, const float* depth_a, const std::uint8_t* rgba_b,
-                      const float* depth_b, std::size_t n, float depth_range, IbsmView& out) {
-  for (std::size_t i = 0; i < n; ++i) {
-    const bool in_a = rgba_a[i * 4 + 3] != 0, in_b = rgba_b[i * 4 + 3] != 0;
-    if (in_a != in_b) ++out.unmatched;
-    if (!(in_a && in_b)) continue;
-    ++out.matched;
-    const float ra = rgba_a[i * 4], ga = rgba_a[i * 4 + 1], ba = rgba_a[i * 4 + 2];
-    const float rb = rgba_b[i * 4], gb = rgba_b[i * 4 + 1], bb = rgba_b[i * 4 + 2];
+/// A view's error sums while a row is compared (locals: the sums run in registers, each the
+/// same running sum as the view's, in pixel order).
+struct ErrorSums {
+  double rgb[3], yuv[3], depth;
+  std::size_t matched, unmatched;
+  explicit ErrorSums(const IbsmView& v)
+      : rgb{v.rgb_sse[0], v.rgb_sse[1], v.rgb_sse[2]},
+        yuv{v.yuv_sse[0], v.yuv_sse[1], v.yuv_sse[2]},
+        depth(v.depth_sse),
+        matched(v.matched),
+        unmatched(v.unmatched) {}
+  void store(IbsmView& v) const {
+    for (int c = 0; c < 3; ++c) v.rgb_sse[c] = rgb[c], v.yuv_sse[c] = yuv[c];
+    v.depth_sse = depth;
+    v.matched = matched;
+    v.unmatched = unmatched;
+  }
+  /// Squared errors of a pixel both views cover (mmetric's steps A, B).
+  void add(const std::uint8_t* a, float depth_a, const std::uint8_t* b, float depth_b,
+           float depth_range) {
+    const float ra = a[0], ga = a[1], ba = a[2];
+    const float rb = b[0], gb = b[1], bb = b[2];
     const Float3 rgb_a{ra, ga, ba}, rgb_b{rb, gb, bb};
     const Float3 yuv_a = yuv_of(ra, ga, ba), yuv_b = yuv_of(rb, gb, bb);
     for (int c = 0; c < 3; ++c) {
       const double d_rgb = static_cast<double>(rgb_a[c]) - static_cast<double>(rgb_b[c]);
       const double d_yuv = static_cast<double>(yuv_a[c]) - static_cast<double>(yuv_b[c]);
-      out.rgb_sse[c] += d_rgb * d_rgb;
-      out.yuv_sse[c] += d_yuv * d_yuv;
+      rgb[c] += d_rgb * d_rgb;
+      yuv[c] += d_yuv * d_yuv;
     }
     const double d =
-        (static_cast<double>(depth_a[i]) - static_cast<double>(depth_b[i])) * 255.0 / depth_range;
-    out.depth_sse += d * d;
+        (static_cast<double>(depth_a) - static_cast<double>(depth_b)) * 255.0 / depth_range;
+    depth += d * d;
   }
-}
-
-std::size_t drawn(const std::uint8_t* rgba, std::size_t n) {
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < n; ++i) count += rgba[i * 4 + 3] != 0;
-  return count;
-}
+};
 
 /// Rows per band: both views' bands (8 bytes a pixel each) stay in the cache.
 constexpr int kBandRows = 64;
@@ -116,18 +123,18 @@ class ViewScorer {
     IbsmView out;
     out.direction = direction;
     out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
-    std::size_t drawn_a = 0, drawn_b = 0;
+    drawn_a_ = drawn_b_ = 0;
     for (int band = 0; band < ref_.bands(); ++band) {
       ref_.draw(band, rgba_a_.data(), depth_a_.data());
       dist_.draw(band, rgba_b_.data(), depth_b_.data());
-      const std::size_t n = static_cast<std::size_t>(w) * ref_.band_rows(band);
-      drawn_a += drawn(rgba_a_.data(), n);
-      drawn_b += drawn(rgba_b_.data(), n);
-      add_pixel_errors(rgba_a_.data(), depth_a_.data(), rgba_b_.data(), depth_b_.data(), n,
-                       dist_.depth_range(), out);
-      if (o.image_quality) push_rows(w, ref_.band_rows(band));
+      for (int y = 0; y < ref_.band_rows(band); ++y) {
+        const std::size_t r = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+        compare_row(&rgba_a_[4 * r], &depth_a_[r], &rgba_b_[4 * r], &depth_b_[r], w,
+                    dist_.depth_range(), out);
+        if (o.image_quality) ssim_.push_row(luma_a_.data(), luma_b_.data(), mask_.data());
+      }
     }
-    if (drawn_a == 0 || drawn_b == 0) {
+    if (drawn_a_ == 0 || drawn_b_ == 0) {
       IbsmView empty;
       empty.direction = direction;
       empty.ssim = empty.ms_ssim = std::numeric_limits<double>::quiet_NaN();
@@ -143,20 +150,36 @@ class ViewScorer {
   }
 
  private:
-  /// The band's rows to the SSIM: the luma of each view (float, as mmetric's YUV) and the
-  /// pixels both cover.
-  void push_rows(int w, int rows) {
-    for (int y = 0; y < rows; ++y) {
-      const std::size_t r = static_cast<std::size_t>(y) * w;
-      for (int x = 0; x < w; ++x) {
-        const std::uint8_t* a = &rgba_a_[(r + x) * 4];
-        const std::uint8_t* b = &rgba_b_[(r + x) * 4];
-        luma_a_[x] = yuv_of(a[0], a[1], a[2])[0];
-        luma_b_[x] = yuv_of(b[0], b[1], b[2])[0];
-        mask_[x] = a[3] != 0 && b[3] != 0;
-      }
-      ssim_.push_row(luma_a_.data(), luma_b_.data(), mask_.data());
+  /// One row of both views: the pixels drawn, the errors where both are (in pixel order: the
+  /// sums run over the view's pixels in order, band after band), and the SSIM's row: each
+  /// view's luma (float, as mmetric's Y) and the pixels both cover.
+  void compare_row(const std::uint8_t* a, const float* depth_a, const std::uint8_t* b,
+                   const float* depth_b, int w, float depth_range, IbsmView& out) {
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* p = a + 4 * static_cast<std::size_t>(x);
+      luma_a_[x] = luma_of(p[0], p[1], p[2]);
     }
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* p = b + 4 * static_cast<std::size_t>(x);
+      luma_b_[x] = luma_of(p[0], p[1], p[2]);
+    }
+    ErrorSums sums(out);
+    std::size_t drawn_a = 0, drawn_b = 0;
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* pa = a + 4 * static_cast<std::size_t>(x);
+      const std::uint8_t* pb = b + 4 * static_cast<std::size_t>(x);
+      const bool in_a = pa[3] != 0, in_b = pb[3] != 0;
+      drawn_a += in_a;
+      drawn_b += in_b;
+      mask_[x] = in_a && in_b;
+      if (in_a != in_b) ++sums.unmatched;
+      if (!(in_a && in_b)) continue;
+      ++sums.matched;
+      sums.add(pa, depth_a[x], pb, depth_b[x], depth_range);
+    }
+    sums.store(out);
+    drawn_a_ += drawn_a;
+    drawn_b_ += drawn_b;
   }
 
   detail::BandRaster ref_, dist_;
@@ -164,6 +187,7 @@ class ViewScorer {
   std::vector<float> depth_a_, depth_b_;
   std::vector<double> luma_a_, luma_b_;
   detail::SsimStream ssim_;
+  std::size_t drawn_a_ = 0, drawn_b_ = 0;
 };
 
 /// Written as every other output (write_file_atomically): a full disk or a write error leaves
