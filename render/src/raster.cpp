@@ -724,7 +724,12 @@ void BandRaster::State::draw_splats(const Target& t) {
   nearest.assign(static_cast<std::size_t>(t.width) * t.rows,
                  std::numeric_limits<float>::infinity());
   const std::size_t band = static_cast<std::size_t>(t.row0 / band_rows);
-  for (std::size_t k = bins.start[band]; k < bins.start[band + 1]; ++k) {
+  const std::size_t end = bins.start[band + 1];
+  for (std::size_t k = bins.start[band]; k < end; ++k) {
+    if (k + kAhead < end) {  // the points of a band lie scattered in the canonical order
+      __builtin_prefetch(&splats[bins.items[k + kAhead]]);
+      if (coloured) __builtin_prefetch(&m.colors_255[bins.items[k + kAhead]]);
+    }
     const std::uint32_t i = bins.items[k];
     const Splat& s = splats[i];
     const float rgb[3] = {coloured ? m.colors_255[i][0] : 255.0f,
