@@ -429,11 +429,32 @@ RenderModel model_of(const Input& input, const SplatOptions& splats) {
 
 namespace {
 
+/// Both inputs read (when not yet) and made ready to draw at once, on two threads when the run
+/// has them (sorting into the canonical order is most of a run's serial part). An error is the
+/// one the sequential order raises: the reference's first.
+void both_models(const Input& ref, const Input& dist, const IbsmOptions& o, RenderModel& a,
+                 RenderModel& b) {
+  const Input* in[2] = {&ref, &dist};
+  RenderModel* out[2] = {&a, &b};
+  std::exception_ptr errors[2];
+#pragma omp parallel for schedule(static, 1) num_threads(std::min(2, thread_count(o.threads)))
+  for (int i = 0; i < 2; ++i) {
+    try {
+      *out[i] = model_of(*in[i], o.splats);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
                       const OptionValues& v) {
   const IbsmOptions o = ibsm_options(v, run);
-  const RenderModel a = model_of(ref, o.splats);
-  const RenderModel b = model_of(dist, o.splats);
+  RenderModel a, b;
+  both_models(ref, dist, o, a, b);
   // The mesh readers' repairs (the cloud readers' are added by run_metric).
   std::vector<std::string> warnings;
   for (const Input* in : {&ref, &dist}) {

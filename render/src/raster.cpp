@@ -647,6 +647,7 @@ void BandRaster::State::draw_mesh(const Target& t) const {
       for (std::uint32_t v : m.triangles[bins.items[k + kAhead]]) {
         __builtin_prefetch(&clip[v]);
         __builtin_prefetch(&screen[v]);
+        if (coloured) __builtin_prefetch(&m.colors_255[v]);
       }
     }
     const std::uint32_t f = bins.items[k];
