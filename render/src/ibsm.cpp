@@ -7,6 +7,7 @@
 #include <omp.h>
 #include <stb/stb_image_write.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -117,8 +118,8 @@ class ViewScorer {
     const std::size_t band_pixels = static_cast<std::size_t>(w) * kBandRows;
     for (auto* v : {&rgba_a_, &rgba_b_}) v->resize(4 * band_pixels);
     for (auto* v : {&depth_a_, &depth_b_}) v->resize(band_pixels);
-    for (auto* v : {&luma_a_, &luma_b_}) v->resize(static_cast<std::size_t>(w));
-    mask_.resize(static_cast<std::size_t>(w));
+    for (auto* v : {&luma_a_, &luma_b_}) v->assign(static_cast<std::size_t>(w), 0.0);
+    mask_.assign(static_cast<std::size_t>(w), 0);
     if (o.image_quality) ssim_.begin(w, ref_.height());
     IbsmView out;
     out.direction = direction;
@@ -128,10 +129,14 @@ class ViewScorer {
       ref_.draw(band, rgba_a_.data(), depth_a_.data());
       dist_.draw(band, rgba_b_.data(), depth_b_.data());
       for (int y = 0; y < ref_.band_rows(band); ++y) {
+        // Columns outside both views' drawn spans are empty in both: luma 0, not in the mask.
+        const std::array<int, 2> span_a = ref_.drawn_columns(y), span_b = dist_.drawn_columns(y);
+        const int x0 = std::min(span_a[0], span_b[0]), x1 = std::max(span_a[1], span_b[1]);
         const std::size_t r = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
-        compare_row(&rgba_a_[4 * r], &depth_a_[r], &rgba_b_[4 * r], &depth_b_[r], w,
+        compare_row(&rgba_a_[4 * r], &depth_a_[r], &rgba_b_[4 * r], &depth_b_[r], x0, x1,
                     dist_.depth_range(), out);
         if (o.image_quality) ssim_.push_row(luma_a_.data(), luma_b_.data(), mask_.data());
+        for (int x = x0; x <= x1; ++x) luma_a_[x] = luma_b_[x] = 0, mask_[x] = 0;
       }
     }
     if (drawn_a_ == 0 || drawn_b_ == 0) {
@@ -150,22 +155,23 @@ class ViewScorer {
   }
 
  private:
-  /// One row of both views: the pixels drawn, the errors where both are (in pixel order: the
-  /// sums run over the view's pixels in order, band after band), and the SSIM's row: each
-  /// view's luma (float, as mmetric's Y) and the pixels both cover.
+  /// One row of both views over the columns [x0, x1] either draws: the pixels drawn, the errors
+  /// where both are (in pixel order: the sums run over the view's pixels in order, band after
+  /// band), and the SSIM's row: each view's luma (float, as mmetric's Y) and the pixels both
+  /// cover (zero elsewhere).
   void compare_row(const std::uint8_t* a, const float* depth_a, const std::uint8_t* b,
-                   const float* depth_b, int w, float depth_range, IbsmView& out) {
-    for (int x = 0; x < w; ++x) {
+                   const float* depth_b, int x0, int x1, float depth_range, IbsmView& out) {
+    for (int x = x0; x <= x1; ++x) {
       const std::uint8_t* p = a + 4 * static_cast<std::size_t>(x);
       luma_a_[x] = luma_of(p[0], p[1], p[2]);
     }
-    for (int x = 0; x < w; ++x) {
+    for (int x = x0; x <= x1; ++x) {
       const std::uint8_t* p = b + 4 * static_cast<std::size_t>(x);
       luma_b_[x] = luma_of(p[0], p[1], p[2]);
     }
     ErrorSums sums(out);
     std::size_t drawn_a = 0, drawn_b = 0;
-    for (int x = 0; x < w; ++x) {
+    for (int x = x0; x <= x1; ++x) {
       const std::uint8_t* pa = a + 4 * static_cast<std::size_t>(x);
       const std::uint8_t* pb = b + 4 * static_cast<std::size_t>(x);
       const bool in_a = pa[3] != 0, in_b = pb[3] != 0;

@@ -382,6 +382,9 @@ struct Target {
   int width, height, row0, rows;
   std::uint8_t* rgba;
   float* depth;
+  /// Per row of the target, the first and last column drawn (width, -1 when none).
+  int* span_lo;
+  int* span_hi;
   int last_row() const { return row0 + rows - 1; }
   std::size_t index(int x, int y) const {
     return static_cast<std::size_t>(x) +
@@ -398,7 +401,12 @@ int round_colour(float c) {
   return c < 0 ? -r : r;
 }
 
-void write_pixel(const Target& t, std::size_t i, float depth, const float colour[3]) {
+void write_pixel(const Target& t, int x, int y, float depth, const float colour[3]) {
+  const std::size_t i = t.index(x, y);
+  int& lo = t.span_lo[y - t.row0];
+  int& hi = t.span_hi[y - t.row0];
+  lo = std::min(lo, x);
+  hi = std::max(hi, x);
   t.depth[i] = depth;
   for (int c = 0; c < 3; ++c) {
     t.rgba[i * 4 + c] = static_cast<std::uint8_t>(round_colour(colour[c]));
@@ -507,7 +515,7 @@ void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceSha
         if (depth[l] <= t.depth[i]) continue;
         float rgb[3];
         shader.shade(c0[l], c1[l], c2[l], rgb);
-        write_pixel(t, i, depth[l], rgb);
+        write_pixel(t, x + l, y, depth[l], rgb);
       }
     }
   }
@@ -595,6 +603,7 @@ struct BandRaster::State {
   std::vector<F4> clip, screen;  // meshes: per vertex
   std::vector<Splat> splats;     // clouds
   std::vector<float> front, nearest;
+  std::vector<int> span_lo, span_hi;  // the last band drawn
   int w2 = 0;
   float half_px = 0, epsilon = 0;
 
@@ -741,7 +750,7 @@ void BandRaster::State::draw_splats(const Target& t) {
       const std::size_t f = static_cast<std::size_t>(y / 2) * w2 + static_cast<std::size_t>(x / 2);
       if (s.depth < front[f] - epsilon || !(d2 < nearest[p])) return;
       nearest[p] = d2;
-      write_pixel(t, p, s.depth, rgb);
+      write_pixel(t, x, y, s.depth, rgb);
     });
   }
 }
@@ -788,10 +797,17 @@ int BandRaster::band_rows(int band) const {
   return std::min(state_->band_rows, state_->height - band_row0(band));
 }
 float BandRaster::depth_range() const { return state_->cam.depth_range; }
+std::array<int, 2> BandRaster::drawn_columns(int row) const {
+  return {state_->span_lo[static_cast<std::size_t>(row)],
+          state_->span_hi[static_cast<std::size_t>(row)]};
+}
 
 void BandRaster::draw(int band, std::uint8_t* rgba, float* depth) {
   State& s = *state_;
-  const Target t{s.width, s.height, band_row0(band), band_rows(band), rgba, depth};
+  s.span_lo.assign(static_cast<std::size_t>(s.band_rows), s.width);
+  s.span_hi.assign(static_cast<std::size_t>(s.band_rows), -1);
+  const Target t{s.width, s.height, band_row0(band),  band_rows(band),
+                 rgba,    depth,    s.span_lo.data(), s.span_hi.data()};
   const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.rows);
   std::fill(rgba, rgba + 4 * n, std::uint8_t{0});
   std::fill(depth, depth + n, -FLT_MAX);  // RendererSw's clear depth

@@ -4,6 +4,7 @@
 // takes its items in the model's order.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 
@@ -34,6 +35,9 @@ class BandRaster {
   /// Draws a band into rgba (4 bytes per pixel) and depth, width * band_rows(band) each,
   /// rows bottom first; clears them first (alpha 0, depth -FLT_MAX).
   void draw(int band, std::uint8_t* rgba, float* depth);
+  /// After draw: the first and last column drawn in row `row` of the band (counted from the
+  /// band's first row); {width, -1} when the row has no pixel drawn.
+  std::array<int, 2> drawn_columns(int row) const;
 
  private:
   struct State;
