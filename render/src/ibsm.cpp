@@ -19,7 +19,6 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/grid_samples.h"
-#include "qm3d/common/large_arrays.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/texture.h"
 #include "qm3d/render/icid.h"
