@@ -154,28 +154,34 @@ double mean_or_nan(double sum, std::size_t count) {
   return count ? sum / static_cast<double>(count) : std::numeric_limits<double>::quiet_NaN();
 }
 
-/// Two doubles per instruction (SSE2 on every x86-64; a compiler splits them elsewhere): each
-/// lane is IEEE arithmetic on its own column, the scalar expression's value bit for bit.
+/// Two doubles per instruction (SSE2 on every x86-64; a compiler splits them elsewhere), or four
+/// (AVX2, where the processor has it): each lane is IEEE arithmetic on its own column (no fused
+/// multiply-add: AVX2 does not bring FMA), the scalar expression's value bit for bit, so the
+/// values do not depend on the processor.
 using Lanes = double __attribute__((vector_size(16)));
+using Lanes4 = double __attribute__((vector_size(32)));
+#define QM3D_ALWAYS_INLINE __attribute__((always_inline)) inline
+
 template <class T>
-T load(const double* p) {
-  T v;
+QM3D_ALWAYS_INLINE void load(T& v, const double* p) {
   std::memcpy(&v, p, sizeof v);
-  return v;
 }
 template <class T>
-void store(double* p, T v) {
+QM3D_ALWAYS_INLINE void store(double* p, const T& v) {
   std::memcpy(p, &v, sizeof v);
 }
 
-/// The vertical sums of a, b, a², b², ab at column x (T = double) or columns x, x + 1 (Lanes):
+/// The vertical sums of a, b, a², b², ab at column x (T = double) or the columns from x (lanes):
 /// over the window's rows in order from 0, as gaussian_filter's first pass.
 template <class T>
-void vertical_at(const double* const ra[], const double* const rb[], int x, double* const v[5]) {
+QM3D_ALWAYS_INLINE void vertical_at(const double* const ra[], const double* const rb[], int x,
+                                    double* const v[5]) {
   const Kernel& k = gaussian_kernel();
   T s[5] = {};
   for (int j = 0; j <= 2 * kRadius; ++j) {
-    const T pa = load<T>(ra[j] + x), pb = load<T>(rb[j] + x);
+    T pa, pb;
+    load(pa, ra[j] + x);
+    load(pb, rb[j] + x);
     const T w = T{} + k[j];
     s[0] += w * pa;
     s[1] += w * pb;
@@ -183,17 +189,62 @@ void vertical_at(const double* const ra[], const double* const rb[], int x, doub
     s[3] += w * (pb * pb);
     s[4] += w * (pa * pb);
   }
-  for (int q = 0; q < 5; ++q) store<T>(v[q] + x, s[q]);
+  for (int q = 0; q < 5; ++q) store(v[q] + x, s[q]);
 }
 
-/// The horizontal sum at column x (or x, x + 1) of the padded vertical sums v.
+/// The horizontal sum at column x (or the columns from x) of the padded vertical sums v.
 template <class T>
-void horizontal_at(const double* v, int x, double* h) {
+QM3D_ALWAYS_INLINE void horizontal_at(const double* v, int x, double* h) {
   const Kernel& k = gaussian_kernel();
   T s = {};
-  for (int j = 0; j <= 2 * kRadius; ++j) s += (T{} + k[j]) * load<T>(v + x + j);
-  store<T>(h + x, s);
+  for (int j = 0; j <= 2 * kRadius; ++j) {
+    T c;
+    load(c, v + x + j);
+    s += (T{} + k[j]) * c;
+  }
+  store(h + x, s);
 }
+
+/// Both passes over a span of columns, W columns at a time, the rest one by one.
+template <class W>
+QM3D_ALWAYS_INLINE void vertical_span(const double* const ra[], const double* const rb[], int lo,
+                                      int hi, double* const v[5]) {
+  constexpr int n = sizeof(W) / sizeof(double);
+  int x = lo;
+  for (; x + n - 1 <= hi; x += n) vertical_at<W>(ra, rb, x, v);
+  for (; x <= hi; ++x) vertical_at<double>(ra, rb, x, v);
+}
+template <class W>
+QM3D_ALWAYS_INLINE void horizontal_span(const double* v, int count, double* h) {
+  constexpr int n = sizeof(W) / sizeof(double);
+  int x = 0;
+  for (; x + n - 1 < count; x += n) horizontal_at<W>(v, x, h);
+  for (; x < count; ++x) horizontal_at<double>(v, x, h);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+__attribute__((target("avx2"))) void vertical_span_avx2(const double* const ra[],
+                                                        const double* const rb[], int lo, int hi,
+                                                        double* const v[5]) {
+  vertical_span<Lanes4>(ra, rb, lo, hi, v);
+}
+__attribute__((target("avx2"))) void horizontal_span_avx2(const double* v, int count, double* h) {
+  horizontal_span<Lanes4>(v, count, h);
+}
+bool has_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+#else
+void vertical_span_avx2(const double* const ra[], const double* const rb[], int lo, int hi,
+                        double* const v[5]) {
+  vertical_span<Lanes>(ra, rb, lo, hi, v);
+}
+void horizontal_span_avx2(const double* v, int count, double* h) {
+  horizontal_span<Lanes>(v, count, h);
+}
+bool has_avx2() { return false; }
+#endif
 
 }  // namespace
 
@@ -237,9 +288,11 @@ struct SsimStream::Scale {
     }
     double* v[5];
     for (int q = 0; q < 5; ++q) v[q] = vertical[q].data() + kRadius;
-    int x = lo;
-    for (; x < hi; x += 2) vertical_at<Lanes>(ra, rb, x, v);
-    if (x == hi) vertical_at<double>(ra, rb, x, v);
+    if (has_avx2()) {
+      vertical_span_avx2(ra, rb, lo, hi, v);
+    } else {
+      vertical_span<Lanes>(ra, rb, lo, hi, v);
+    }
     for (int q = 0; q < 5; ++q) {
       if (lo == 0) {
         for (int c = -kRadius; c < 0; ++c) v[q][c] = v[q][reflect(c, width)];
@@ -256,9 +309,11 @@ struct SsimStream::Scale {
     for (int q = 0; q < 5; ++q) {
       double* h = horizontal[q].data();
       const double* v = vertical[q].data() + first;  // padded: column first - kRadius
-      int x = 0;
-      for (; x + 1 < n; x += 2) horizontal_at<Lanes>(v, x, h);
-      if (x < n) horizontal_at<double>(v, x, h);
+      if (has_avx2()) {
+        horizontal_span_avx2(v, n, h);
+      } else {
+        horizontal_span<Lanes>(v, n, h);
+      }
     }
   }
   /// Scores row y: the terms at its mask pixels, summed in order (the pooled means' order).
