@@ -29,27 +29,13 @@
 namespace qm3d::render {
 
 const std::vector<std::string>& ibsm_value_names() {
-  static const std::vector<std::string> names = {"r_mse",
-                                                 "g_mse",
-                                                 "b_mse",
-                                                 "rgb_mse",
-                                                 "y_mse",
-                                                 "u_mse",
-                                                 "v_mse",
-                                                 "yuv_mse",
-                                                 "geo_mse",
-                                                 "r_psnr",
-                                                 "g_psnr",
-                                                 "b_psnr",
-                                                 "rgb_psnr",
-                                                 "y_psnr",
-                                                 "u_psnr",
-                                                 "v_psnr",
-                                                 "yuv_psnr",
-                                                 "geo_psnr",
-                                                 "unmatched_pixel_percentage",
-                                                 "ssim",
-                                                 "ms_ssim"};
+  // clang-format off
+  static const std::vector<std::string> names = {
+      "r_mse",   "g_mse",   "b_mse",   "rgb_mse", "y_mse",    "u_mse",    "v_mse",
+      "yuv_mse", "geo_mse", "r_psnr",  "g_psnr",  "b_psnr",   "rgb_psnr", "y_psnr",
+      "u_psnr",  "v_psnr",  "yuv_psnr", "geo_psnr", "unmatched_pixel_percentage", "ssim",
+      "ms_ssim"};
+  // clang-format on
   return names;
 }
 
@@ -243,9 +229,7 @@ std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderMode
   return out;
 }
 
-double clipped_psnr(double mse) {
-  return std::min(kPsnrClip, 10.0 * std::log10((255.0 * 255.0) / mse));
-}
+double clipped_psnr(double mse) { return std::min(kPsnrClip, 10.0 * std::log10((255.0 * 255.0) / mse)); }
 
 /// mmetric's pooling: sums over the views, / matched pixels, PSNRs clipped.
 NamedValues pooled_values(const std::vector<IbsmView>& views, std::size_t& matched_out) {
@@ -281,8 +265,7 @@ NamedValues pooled_values(const std::vector<IbsmView>& views, std::size_t& match
   for (int k = 0; k < 9; ++k) out.emplace_back(names[9 + k], clipped_psnr(mse[k]));
   out.emplace_back("unmatched_pixel_percentage", 100.0 * static_cast<double>(unmatched) / m);
   if (ssim_views > 0) out.emplace_back("ssim", ssim_sum / static_cast<double>(ssim_views));
-  if (ms_ssim_views > 0)
-    out.emplace_back("ms_ssim", ms_ssim_sum / static_cast<double>(ms_ssim_views));
+  if (ms_ssim_views > 0) out.emplace_back("ms_ssim", ms_ssim_sum / static_cast<double>(ms_ssim_views));
   return out;
 }
 
@@ -292,9 +275,7 @@ nlohmann::json view_details(const IbsmView& v) {
   j["left_out"] = v.left_out;
   j["matched_pixels"] = v.matched;
   j["unmatched_pixels"] = v.unmatched;
-  auto finite_or_null = [](double x) {
-    return std::isnan(x) ? nlohmann::json() : nlohmann::json(x);
-  };
+  auto finite_or_null = [](double x) { return std::isnan(x) ? nlohmann::json() : nlohmann::json(x); };
   const double m = static_cast<double>(v.matched);
   const double yuv_mse = v.matched ? (v.yuv_sse[0] * 6 + v.yuv_sse[1] + v.yuv_sse[2]) / 8 / m : NAN;
   j["yuv_psnr"] = finite_or_null(v.matched ? clipped_psnr(yuv_mse) : NAN);
@@ -366,7 +347,8 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   const std::string far = float32_precision_warning(
       Vec3{c[0] - half, c[1] - half, c[2] - half}, Vec3{c[0] + half, c[1] + half, c[2] + half},
       2.0 * half / options.resolution, "pixel size",
-      "ibsm: " + reference_name + ", " + distorted_name, "mmetric's renderer");
+      "ibsm: " + reference_name + ", " + distorted_name,
+      "mmetric's renderer");
   if (!far.empty()) r.warnings.push_back(far);
   std::size_t matched = 0;
   NamedValues values = pooled_values(views, matched);
@@ -397,8 +379,8 @@ MetricResult compute_ibsm(const RenderModel& reference, const RenderModel& disto
   nlohmann::json per_view = nlohmann::json::array();
   for (const IbsmView& v : views) per_view.push_back(view_details(v));
   r.details["views"] = per_view;
-  r.text_note =
-      "YUV PSNR " + std::to_string(d.score) + " dB over " + std::to_string(dirs.size()) + " views";
+  r.text_note = "YUV PSNR " + std::to_string(d.score) + " dB over " + std::to_string(dirs.size()) +
+                " views";
   r.provenance.version = kVersion;
   r.provenance.reference = reference_name;
   r.provenance.distorted = distorted_name;
@@ -495,19 +477,19 @@ std::vector<Float3> view_directions(const IbsmOptions& options) {
 IbsmOptions ibsm_options(const OptionValues& v, const RunOptions& run) {
   IbsmOptions o;
   static_cast<RunOptions&>(o) = run;
-  o.layout =
-      v.at("layout").get<std::string>() == "cmdm18" ? ViewLayout::kCmdm18 : ViewLayout::kFibonacci;
+  o.layout = v.at("layout").get<std::string>() == "cmdm18" ? ViewLayout::kCmdm18
+                                                            : ViewLayout::kFibonacci;
   o.views = v.at("views").get<int>();
   o.resolution = v.at("resolution").get<int>();
   const nlohmann::json& r = v.at("rotation");
   o.rotation_deg = {r.at(0).get<float>(), r.at(1).get<float>(), r.at(2).get<float>()};
   o.culling = !v.at("no_culling").get<bool>();
-  o.lighting =
-      v.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight : Lighting::kUnlit;
+  o.lighting = v.at("lighting").get<std::string>() == "headlight" ? Lighting::kHeadlight
+                                                                   : Lighting::kUnlit;
   o.image_quality = !v.at("no_ssim").get<bool>();
   o.splats.size = v.at("splat_size").get<double>();
-  o.splats.shape =
-      v.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc : SplatShape::kSquare;
+  o.splats.shape = v.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc
+                                                                     : SplatShape::kSquare;
   o.save_views = v.at("save_views").get<std::string>();
   return o;
 }
@@ -535,13 +517,10 @@ std::vector<ViewPair> result_view_pairs(const MetricResult& result, const Input&
   const nlohmann::json& d = result.details;
   const nlohmann::json& render = d.at("render");
   SplatOptions ref_splats, dist_splats;
-  ref_splats.shape = dist_splats.shape = render.at("splat_shape").get<std::string>() == "disc"
-                                             ? SplatShape::kDisc
-                                             : SplatShape::kSquare;
-  if (d.contains("splat_size_reference"))
-    ref_splats.size = d.at("splat_size_reference").get<double>();
-  if (d.contains("splat_size_distorted"))
-    dist_splats.size = d.at("splat_size_distorted").get<double>();
+  ref_splats.shape = dist_splats.shape =
+      render.at("splat_shape").get<std::string>() == "disc" ? SplatShape::kDisc : SplatShape::kSquare;
+  if (d.contains("splat_size_reference")) ref_splats.size = d.at("splat_size_reference").get<double>();
+  if (d.contains("splat_size_distorted")) dist_splats.size = d.at("splat_size_distorted").get<double>();
   const RenderModel a = model_of(reference, ref_splats);
   const RenderModel b = model_of(distorted, dist_splats);
   Frame frame;
@@ -570,8 +549,7 @@ MetricSpec ibsm_spec() {
   MetricSpec s;
   s.name = "ibsm";
   s.title = "IBSM";
-  s.reproduces =
-      "MPEG mmetric 1.1.7 compare --mode ibsm, sw_raster (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
+  s.reproduces = "MPEG mmetric 1.1.7 compare --mode ibsm, sw_raster (MPEGGroup/mpeg-pcc-mmetric @ 5faa660)";
   s.summary =
       "Image-based quality from rendered views (mmetric's IBSM: PSNR of RGB, YUV and depth over "
       "the pixels both objects cover, plus SSIM / MS-SSIM of the luma); meshes and point clouds "
@@ -594,11 +572,7 @@ MetricSpec ibsm_spec() {
   }
   s.options = {
       {"views", "Views on a Fibonacci sphere (mmetric --ibsmCameraCount)", 16, {}, 2, 4096},
-      {"resolution",
-       "Width = height of each view, pixels (mmetric --ibsmResolution)",
-       2048,
-       {},
-       16,
+      {"resolution", "Width = height of each view, pixels (mmetric --ibsmResolution)", 2048, {}, 16,
        16384},
       {"rotation",
        "Rotation of the views: polar angle, azimuth, magnitude in degrees, applied when the "
@@ -608,28 +582,20 @@ MetricSpec ibsm_spec() {
        "Where the cameras are: fibonacci = --views directions on mmetric's Fibonacci sphere; "
        "cmdm18 = the 18 directions of the CMDM report's image metrics (6 axes + 12 plane "
        "diagonals)",
-       "fibonacci",
-       {"fibonacci", "cmdm18"}},
+       "fibonacci", {"fibonacci", "cmdm18"}},
       {"no_culling", "Draw back faces too (mmetric --ibsmDisableCulling)", false},
       {"lighting",
        "none = the colours themselves (mmetric's); headlight = meshes shaded by a light at the "
        "camera, colour x (0.4 + 0.6 n.v) (mmetric's lit shader's constants)",
-       "none",
-       {"none", "headlight"}},
+       "none", {"none", "headlight"}},
       {"no_ssim", "Leave out SSIM and MS-SSIM (faster)", false},
       {"splat_size",
        "Size of a point cloud's splats (diameter or side), world units; 0 = 6 x the median "
        "nearest-point spacing",
-       0.0,
-       {},
-       0,
-       1e300},
-      {"splat_shape",
-       "Shape of a point cloud's splats: disc (of diameter --splat-size) or square",
-       "disc",
-       {"disc", "square"}},
-      {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)",
-       ""},
+       0.0, {}, 0, 1e300},
+      {"splat_shape", "Shape of a point cloud's splats: disc (of diameter --splat-size) or square",
+       "disc", {"disc", "square"}},
+      {"save_views", "Directory where each view of both inputs is written as PNG (empty: none)", ""},
   };
   s.run = run_ibsm;
   return s;

@@ -189,17 +189,16 @@ struct PointsAdaptor {
     return false;
   }
 };
-using PointsTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
-                                        PointsAdaptor, 3, std::uint32_t>;
+using PointsTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>, PointsAdaptor, 3, std::uint32_t>;
 
 /// The median distance of a point to its nearest point at a distance > 0, over an evenly
 /// spaced subset of the points; 0 when no point has such a neighbour.
 double median_spacing(const std::vector<Float3>& points) {
   const PointsAdaptor adaptor{points};
   const PointsTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
-  const std::size_t step =
-      std::max<std::size_t>(1, (points.size() + kSpacingSamples - 1) / kSpacingSamples);
+  const std::size_t step = std::max<std::size_t>(1, (points.size() + kSpacingSamples - 1) /
+                                                        kSpacingSamples);
   constexpr std::size_t kNeighbours = 8;  // enough to pass a few coincident points
   std::vector<double> spacing;
   for (std::size_t i = 0; i < points.size(); i += step) {
@@ -230,8 +229,7 @@ RenderModel cloud_model(const ColoredCloud& cloud, const SplatOptions& options) 
     keys[i].pos = {static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
     if (has_colors) {
       const Rgb& c = cloud.colors[i];
-      keys[i].col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g),
-                     mesh::mm_channel_255(c.b)};
+      keys[i].col = {mesh::mm_channel_255(c.r), mesh::mm_channel_255(c.g), mesh::mm_channel_255(c.b)};
     }
   }
   std::sort(keys.begin(), keys.end(), key_less);
@@ -294,13 +292,11 @@ double box_ratio(const RenderModel& a, const RenderModel& b) {
 }
 
 std::vector<Float3> fibonacci_directions(int count, const Float3& rotation_deg) {
-  if (count < 2)
-    throw std::invalid_argument("views: at least 2 (got " + std::to_string(count) + ")");
+  if (count < 2) throw std::invalid_argument("views: at least 2 (got " + std::to_string(count) + ")");
   const bool rotate = rotation_deg[2] != 0.0f;
   M4 rot = detail::identity();
   if (rotate) {
-    constexpr float kRadPerDeg =
-        static_cast<float>(0.01745329251994329576923690768489);  // glm::radians
+    constexpr float kRadPerDeg = static_cast<float>(0.01745329251994329576923690768489);  // glm::radians
     const float inclination = rotation_deg[0] * kRadPerDeg;
     const float azimuth = rotation_deg[1] * kRadPerDeg;
     const float intrinsic = rotation_deg[2] * kRadPerDeg;
@@ -359,8 +355,8 @@ Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
   const M4 view = detail::look_at(eye, center, up);
   const M4 glob = detail::mul(detail::translation({ratio * radius, radius, 0}),
                               detail::scaling({1.0f, 1.0f, -1.0f}));
-  const M4 proj =
-      detail::ortho(-ratio * radius, ratio * radius, -radius, radius, 0.0f, 2.0f * radius);
+  const M4 proj = detail::ortho(-ratio * radius, ratio * radius, -radius, radius, 0.0f,
+                                2.0f * radius);
   const M4 model_view = detail::mul(view, detail::identity());
   Camera c;
   c.mvp = detail::mul(detail::mul(proj, glob), model_view);
@@ -423,10 +419,10 @@ F3 interpolate(const F3 v[3], float b0, float b1, float b2) {
 /// What colours a face's pixels: its corners' colours (ShaderCpv), a texture (ShaderMap) or red
 /// (ShaderRed), optionally lit by the headlight.
 struct FaceShader {
-  const F3* colour = nullptr;  ///< 3 corner colours, 0..255
+  const F3* colour = nullptr;                  ///< 3 corner colours, 0..255
   const mesh::TextureImage* texture = nullptr;
-  F3 uv[3];                    ///< (u, v, 0) per corner
-  const F3* normal = nullptr;  ///< 3 corner normals: the headlight is on
+  F3 uv[3];                                    ///< (u, v, 0) per corner
+  const F3* normal = nullptr;                  ///< 3 corner normals: the headlight is on
   F3 towards_camera;
   bool two_sided = false;
 
@@ -759,9 +755,9 @@ void BandRaster::State::draw_splats(const Target& t) {
 
 std::vector<Float3> cmdm18_directions() {
   const float d = static_cast<float>(1 / std::sqrt(2.0));
-  return {{1, 0, 0},  {-1, 0, 0},  {0, 1, 0},  {0, -1, 0},  {0, 0, 1},  {0, 0, -1},
-          {d, d, 0},  {d, -d, 0},  {-d, d, 0}, {-d, -d, 0}, {d, 0, d},  {d, 0, -d},
-          {-d, 0, d}, {-d, 0, -d}, {0, d, d},  {0, d, -d},  {0, -d, d}, {0, -d, -d}};
+  return {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0},  {0, 0, 1},  {0, 0, -1},
+          {d, d, 0},  {d, -d, 0}, {-d, d, 0}, {-d, -d, 0}, {d, 0, d},  {d, 0, -d},
+          {-d, 0, d}, {-d, 0, -d}, {0, d, d}, {0, d, -d},  {0, -d, d}, {0, -d, -d}};
 }
 
 namespace detail {
