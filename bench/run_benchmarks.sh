@@ -28,9 +28,12 @@
 #            qm3d's wall <= 1/4 of mm's, peak RSS <= mm's (reported, not enforced).
 #   ibsm     `ibsm --threads 2` with its defaults (16 views of 2048², SSIM and MS-SSIM) on the
 #            monkey pair, blob7's pair and the 1M-point sphere pair; when QM3D_MMETRIC is set,
-#            mm's `compare --mode ibsm` (one thread, no SSIM) runs on the two mesh pairs in the
-#            same loop, interleaved, and qm3d's YUV PSNR must equal the one mm prints. Targets:
-#            wall <= mm's on meshes, the cloud pair <= 10 s (reported, not enforced).
+#            mm's `compare --mode ibsm` runs on the two mesh pairs in the same loop, interleaved,
+#            and qm3d's YUV PSNR must equal the one mm prints. mm 1.1.7 has no SSIM option and no
+#            thread option for ibsm (it draws and compares one view at a time on one thread), so
+#            it runs as it ships: qm3d does more work (SSIM and MS-SSIM of every view). Targets:
+#            on meshes qm3d's wall <= 1/2 of mm's and its peak RSS <= 1.5 x mm's, the cloud pair
+#            <= 10 s (reported, not enforced).
 #   graphsim `graphsim` / `msgraphsim --threads 2` on the vox1 pair with the reference data's
 #            keypoint file (vox1_ref / vox1_requant9, 56k points, 64 keypoints; the authors' code
 #            under Octave: 2.2 s / 4.7 s CPU, ../shared/data/reference/graphsim), the keypoint draw
@@ -492,7 +495,7 @@ if [ "$WHICH" = all ] || [ "$WHICH" = ibsm ]; then
       echo "FAIL: $label: qm3d's YUV PSNR differs between runs or is missing" >&2
       STATUS=1
     fi
-    target="wall <= mm's"
+    target="wall <= 1/2 mm's, RSS <= 1.5 x mm's"
     [ "$kind" = cloud ] && target="<= 10 s (mm draws no cloud)"
     [ "$kind" = mesh ] && [ -z "$MM" ] && target="(QM3D_MMETRIC unset: no mm to compare)"
     printf '| %s | qm3d (with SSIM, MS-SSIM) | 2 | %s s | %s s | %s MB | %s | %s |\n' "$label" \
@@ -506,7 +509,8 @@ if [ "$WHICH" = all ] || [ "$WHICH" = ibsm ]; then
     printf '| %s | mm compare --mode ibsm | 1 | %s s | %s s | %s MB | %s | |\n' "$label" \
       "$(stats "$TMP/tm" 0)" "$(stats "$TMP/tm" 1)" "$(stats "$TMP/tm" 2 1024)" "$sm"
     wq=$(median "$TMP/tq" 0) wm=$(median "$TMP/tm" 0)
-    summary+=("$label: qm3d / mm wall $wq / $wm s = $($PY -c "print('%.2f' % ($wq / max($wm, 0.01)))") (target <= 1)")
+    rq=$(median "$TMP/tq" 2) rm=$(median "$TMP/tm" 2)
+    summary+=("$label: mm / qm3d wall $wm / $wq s = $($PY -c "print('%.2f' % ($wm / max($wq, 0.01)))") x (target >= 2); qm3d / mm peak RSS $($PY -c "print('%.0f / %.0f MB = %.2f' % ($rq / 1024, $rm / 1024, $rq / $rm))") (target <= 1.5)")
     if $PY -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(0 if abs(a - b) <= 5e-7 * abs(b) + 5e-7 else 1)" "$s" "$sm"; then
       summary+=("ok: $label: qm3d's YUV PSNR $s rounds to mm's $sm")
     else

@@ -7,104 +7,179 @@
 #include <omp.h>
 #include <stb/stb_image_write.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <ostream>
 #include <stdexcept>
 
 #include "qm3d/common/error.h"
-#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/file_io.h"
-#include "qm3d/common/large_arrays.h"
+#include "qm3d/common/grid_samples.h"
 #include "qm3d/common/version.h"
 #include "qm3d/mesh/texture.h"
 #include "qm3d/render/icid.h"
 #include "qm3d/render/image_quality.h"
+#include "raster_bands.h"
+#include "ssim_stream.h"
 
 namespace qm3d::render {
 
 const std::vector<std::string>& ibsm_value_names() {
+  // clang-format off
   static const std::vector<std::string> names = {
       "r_mse",   "g_mse",   "b_mse",   "rgb_mse", "y_mse",    "u_mse",    "v_mse",
       "yuv_mse", "geo_mse", "r_psnr",  "g_psnr",  "b_psnr",   "rgb_psnr", "y_psnr",
       "u_psnr",  "v_psnr",  "yuv_psnr", "geo_psnr", "unmatched_pixel_percentage", "ssim",
       "ms_ssim"};
+  // clang-format on
   return names;
 }
 
 namespace {
 
+/// mmColor.h rgbToYuvBt709_256's Y, in float as mmetric.
+float luma_of(float r, float g, float b) { return 0.2126F * r + 0.7152F * g + 0.0722F * b; }
+
 /// mmColor.h rgbToYuvBt709_256, in float as mmetric.
 Float3 yuv_of(float r, float g, float b) {
-  return {0.2126F * r + 0.7152F * g + 0.0722F * b,
-          -0.1146F * r - 0.3854F * g + 0.5000F * b + 128.0F,
+  return {luma_of(r, g, b), -0.1146F * r - 0.3854F * g + 0.5000F * b + 128.0F,
           0.5000F * r - 0.4542F * g - 0.0458F * b + 128.0F};
 }
 
-GreyImage luma_image(const View& v) {
-  GreyImage g;
-  g.width = v.width;
-  g.height = v.height;
-  reserve_with_huge_pages(g.values, static_cast<std::size_t>(v.width) * v.height);
-  g.values.resize(static_cast<std::size_t>(v.width) * v.height);
-  for (std::size_t i = 0; i < g.values.size(); ++i) {
-    g.values[i] = yuv_of(v.rgba[i * 4], v.rgba[i * 4 + 1], v.rgba[i * 4 + 2])[0];
+/// A view's error sums while a row is compared (locals: the sums run in registers, each the
+/// same running sum as the view's, in pixel order).
+struct ErrorSums {
+  double rgb[3], yuv[3], depth;
+  std::size_t matched, unmatched;
+  explicit ErrorSums(const IbsmView& v)
+      : rgb{v.rgb_sse[0], v.rgb_sse[1], v.rgb_sse[2]},
+        yuv{v.yuv_sse[0], v.yuv_sse[1], v.yuv_sse[2]},
+        depth(v.depth_sse),
+        matched(v.matched),
+        unmatched(v.unmatched) {}
+  void store(IbsmView& v) const {
+    for (int c = 0; c < 3; ++c) v.rgb_sse[c] = rgb[c], v.yuv_sse[c] = yuv[c];
+    v.depth_sse = depth;
+    v.matched = matched;
+    v.unmatched = unmatched;
   }
-  return g;
-}
-
-/// Squared errors of the pixels both views cover; the counts (mmetric's steps 0, A, B).
-void add_pixel_errors(const View& a, const View& b, float depth_range, IbsmView& out) {
-  const std::size_t n = a.depth.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const bool in_a = a.rgba[i * 4 + 3] != 0, in_b = b.rgba[i * 4 + 3] != 0;
-    if (in_a != in_b) ++out.unmatched;
-    if (!(in_a && in_b)) continue;
-    ++out.matched;
-    const float ra = a.rgba[i * 4], ga = a.rgba[i * 4 + 1], ba = a.rgba[i * 4 + 2];
-    const float rb = b.rgba[i * 4], gb = b.rgba[i * 4 + 1], bb = b.rgba[i * 4 + 2];
+  /// Squared errors of a pixel both views cover (mmetric's steps A, B).
+  void add(const std::uint8_t* a, float depth_a, const std::uint8_t* b, float depth_b,
+           float depth_range) {
+    const float ra = a[0], ga = a[1], ba = a[2];
+    const float rb = b[0], gb = b[1], bb = b[2];
     const Float3 rgb_a{ra, ga, ba}, rgb_b{rb, gb, bb};
     const Float3 yuv_a = yuv_of(ra, ga, ba), yuv_b = yuv_of(rb, gb, bb);
     for (int c = 0; c < 3; ++c) {
       const double d_rgb = static_cast<double>(rgb_a[c]) - static_cast<double>(rgb_b[c]);
       const double d_yuv = static_cast<double>(yuv_a[c]) - static_cast<double>(yuv_b[c]);
-      out.rgb_sse[c] += d_rgb * d_rgb;
-      out.yuv_sse[c] += d_yuv * d_yuv;
+      rgb[c] += d_rgb * d_rgb;
+      yuv[c] += d_yuv * d_yuv;
     }
-    const double d = (static_cast<double>(a.depth[i]) - static_cast<double>(b.depth[i])) * 255.0 /
-                     depth_range;
-    out.depth_sse += d * d;
+    const double d =
+        (static_cast<double>(depth_a) - static_cast<double>(depth_b)) * 255.0 / depth_range;
+    depth += d * d;
   }
-}
+};
 
-std::vector<std::uint8_t> both_covered(const View& a, const View& b) {
-  std::vector<std::uint8_t> mask(a.depth.size());
-  for (std::size_t i = 0; i < mask.size(); ++i) {
-    mask[i] = a.rgba[i * 4 + 3] != 0 && b.rgba[i * 4 + 3] != 0;
-  }
-  return mask;
-}
+/// Rows per band: both views' bands (8 bytes a pixel each) stay in the cache.
+constexpr int kBandRows = 64;
 
-IbsmView compare_views(const View& a, const View& b, const Float3& direction, bool image_quality) {
-  IbsmView out;
-  out.direction = direction;
-  out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
-  if (a.drawn_pixels() == 0 || b.drawn_pixels() == 0) {
-    out.left_out = true;
+/// One thread's view comparison: both objects drawn band by band into the same buffers, each
+/// band's errors summed and its rows (luma, mask) fed to the streaming SSIM, so that a thread
+/// holds a few bands rather than two views.
+class ViewScorer {
+ public:
+  IbsmView score(const RenderModel& ref, const RenderModel& dist, const Frame& frame,
+                 const Float3& direction, const IbsmOptions& o) {
+    const RasterOptions ro{o.resolution, o.culling, o.lighting};
+    ref_.prepare(ref, frame, direction, ro, kBandRows);
+    dist_.prepare(dist, frame, direction, ro, kBandRows);
+    const int w = ref_.width();
+    const std::size_t band_pixels = static_cast<std::size_t>(w) * kBandRows;
+    for (auto* v : {&rgba_a_, &rgba_b_}) v->resize(4 * band_pixels);
+    for (auto* v : {&depth_a_, &depth_b_}) v->resize(band_pixels);
+    for (auto* v : {&luma_a_, &luma_b_}) v->assign(static_cast<std::size_t>(w), 0.0);
+    mask_.assign(static_cast<std::size_t>(w), 0);
+    if (o.image_quality) ssim_.begin(w, ref_.height());
+    IbsmView out;
+    out.direction = direction;
+    out.ssim = out.ms_ssim = std::numeric_limits<double>::quiet_NaN();
+    drawn_a_ = drawn_b_ = 0;
+    for (int band = 0; band < ref_.bands(); ++band) {
+      ref_.draw(band, rgba_a_.data(), depth_a_.data());
+      dist_.draw(band, rgba_b_.data(), depth_b_.data());
+      for (int y = 0; y < ref_.band_rows(band); ++y) {
+        // Columns outside both views' drawn spans are empty in both: luma 0, not in the mask.
+        const std::array<int, 2> span_a = ref_.drawn_columns(y), span_b = dist_.drawn_columns(y);
+        const int x0 = std::min(span_a[0], span_b[0]), x1 = std::max(span_a[1], span_b[1]);
+        const std::size_t r = static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+        compare_row(&rgba_a_[4 * r], &depth_a_[r], &rgba_b_[4 * r], &depth_b_[r], x0, x1,
+                    dist_.depth_range(), out);
+        if (o.image_quality) ssim_.push_row(luma_a_.data(), luma_b_.data(), mask_.data());
+        for (int x = x0; x <= x1; ++x) luma_a_[x] = luma_b_[x] = 0, mask_[x] = 0;
+      }
+    }
+    if (drawn_a_ == 0 || drawn_b_ == 0) {
+      IbsmView empty;
+      empty.direction = direction;
+      empty.ssim = empty.ms_ssim = std::numeric_limits<double>::quiet_NaN();
+      empty.left_out = true;
+      return empty;
+    }
+    if (o.image_quality && out.matched > 0) {
+      const SsimScores q = ssim_.finish();
+      out.ssim = q.ssim;
+      out.ms_ssim = q.ms_ssim;
+    }
     return out;
   }
-  add_pixel_errors(a, b, b.depth_range, out);
-  if (image_quality && out.matched > 0) {
-    const GreyImage la = luma_image(a), lb = luma_image(b);
-    const std::vector<std::uint8_t> mask = both_covered(a, b);
-    const SsimScores q = masked_ssim_scores(la, lb, mask);
-    out.ssim = q.ssim;
-    out.ms_ssim = q.ms_ssim;
+
+ private:
+  /// One row of both views over the columns [x0, x1] either draws: the pixels drawn, the errors
+  /// where both are (in pixel order: the sums run over the view's pixels in order, band after
+  /// band), and the SSIM's row: each view's luma (float, as mmetric's Y) and the pixels both
+  /// cover (zero elsewhere).
+  void compare_row(const std::uint8_t* a, const float* depth_a, const std::uint8_t* b,
+                   const float* depth_b, int x0, int x1, float depth_range, IbsmView& out) {
+    for (int x = x0; x <= x1; ++x) {
+      const std::uint8_t* p = a + 4 * static_cast<std::size_t>(x);
+      luma_a_[x] = luma_of(p[0], p[1], p[2]);
+    }
+    for (int x = x0; x <= x1; ++x) {
+      const std::uint8_t* p = b + 4 * static_cast<std::size_t>(x);
+      luma_b_[x] = luma_of(p[0], p[1], p[2]);
+    }
+    ErrorSums sums(out);
+    std::size_t drawn_a = 0, drawn_b = 0;
+    for (int x = x0; x <= x1; ++x) {
+      const std::uint8_t* pa = a + 4 * static_cast<std::size_t>(x);
+      const std::uint8_t* pb = b + 4 * static_cast<std::size_t>(x);
+      const bool in_a = pa[3] != 0, in_b = pb[3] != 0;
+      drawn_a += in_a;
+      drawn_b += in_b;
+      mask_[x] = in_a && in_b;
+      if (in_a != in_b) ++sums.unmatched;
+      if (!(in_a && in_b)) continue;
+      ++sums.matched;
+      sums.add(pa, depth_a[x], pb, depth_b[x], depth_range);
+    }
+    sums.store(out);
+    drawn_a_ += drawn_a;
+    drawn_b_ += drawn_b;
   }
-  return out;
-}
+
+  detail::BandRaster ref_, dist_;
+  std::vector<std::uint8_t> rgba_a_, rgba_b_, mask_;
+  std::vector<float> depth_a_, depth_b_;
+  std::vector<double> luma_a_, luma_b_;
+  detail::SsimStream ssim_;
+  std::size_t drawn_a_ = 0, drawn_b_ = 0;
+};
 
 /// Written as every other output (write_file_atomically): a full disk or a write error leaves
 /// no empty or truncated PNG behind and fails naming the file.
@@ -123,7 +198,8 @@ std::string view_file(int index, const char* which) {
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
-/// Renders and compares every view (views in parallel, each written to its own slot).
+/// Renders and compares every view (views in parallel, each written to its own slot; one
+/// ViewScorer per thread, its buffers reused from view to view).
 std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderModel& dist,
                                         const Frame& frame, const std::vector<Float3>& dirs,
                                         const IbsmOptions& o) {
@@ -131,16 +207,18 @@ std::vector<IbsmView> compare_all_views(const RenderModel& ref, const RenderMode
   std::vector<std::exception_ptr> errors(dirs.size());
   const RasterOptions ro{o.resolution, o.culling, o.lighting};
   const int n = static_cast<int>(dirs.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(o.threads))
+  const int threads = std::max(1, std::min(thread_count(o.threads), n));
+  std::vector<std::unique_ptr<ViewScorer>> scorers(static_cast<std::size_t>(threads));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (int i = 0; i < n; ++i) {
     try {
-      const View a = render_view(ref, frame, dirs[i], ro);
-      const View b = render_view(dist, frame, dirs[i], ro);
       if (!o.save_views.empty()) {
-        write_png(o.save_views / view_file(i, "reference"), a);
-        write_png(o.save_views / view_file(i, "distorted"), b);
+        write_png(o.save_views / view_file(i, "reference"), render_view(ref, frame, dirs[i], ro));
+        write_png(o.save_views / view_file(i, "distorted"), render_view(dist, frame, dirs[i], ro));
       }
-      out[i] = compare_views(a, b, dirs[i], o.image_quality);
+      auto& scorer = scorers[static_cast<std::size_t>(omp_get_thread_num())];
+      if (!scorer) scorer = std::make_unique<ViewScorer>();
+      out[i] = scorer->score(ref, dist, frame, dirs[i], o);
     } catch (...) {
       errors[i] = std::current_exception();
     }
@@ -338,11 +416,32 @@ RenderModel model_of(const Input& input, const SplatOptions& splats) {
 
 namespace {
 
+/// Both inputs read (when not yet) and made ready to draw at once, on two threads when the run
+/// has them (sorting into the canonical order is most of a run's serial part). An error is the
+/// one the sequential order raises: the reference's first.
+void both_models(const Input& ref, const Input& dist, const IbsmOptions& o, RenderModel& a,
+                 RenderModel& b) {
+  const Input* in[2] = {&ref, &dist};
+  RenderModel* out[2] = {&a, &b};
+  std::exception_ptr errors[2];
+#pragma omp parallel for schedule(static, 1) num_threads(std::min(2, thread_count(o.threads)))
+  for (int i = 0; i < 2; ++i) {
+    try {
+      *out[i] = model_of(*in[i], o.splats);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  }
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
 MetricResult run_ibsm(const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
                       const OptionValues& v) {
   const IbsmOptions o = ibsm_options(v, run);
-  const RenderModel a = model_of(ref, o.splats);
-  const RenderModel b = model_of(dist, o.splats);
+  RenderModel a, b;
+  both_models(ref, dist, o, a, b);
   // The mesh readers' repairs (the cloud readers' are added by run_metric).
   std::vector<std::string> warnings;
   for (const Input* in : {&ref, &dist}) {

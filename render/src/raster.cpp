@@ -18,6 +18,7 @@
 #include "float_ops.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/large_arrays.h"
+#include "raster_bands.h"
 
 namespace qm3d::render {
 
@@ -371,16 +372,40 @@ Camera camera_for(const Frame& frame, F3 direction, int width, int height) {
   return c;
 }
 
+/// Where a view is drawn: the rows [row0, row0 + rows) of a width x height image (a band, or
+/// the whole image); pixel (x, y) at index x + (y - row0) * width of rgba (4 bytes) and depth.
 struct Target {
-  int width, height;
+  int width, height, row0, rows;
   std::uint8_t* rgba;
   float* depth;
+  /// Per row of the target, the first and last column drawn (width, -1 when none).
+  int* span_lo;
+  int* span_hi;
+  int last_row() const { return row0 + rows - 1; }
+  std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(x) +
+           static_cast<std::size_t>(y - row0) * static_cast<std::size_t>(width);
+  }
 };
 
-void write_pixel(const Target& t, std::size_t i, float depth, const float colour[3]) {
+/// std::roundf (half away from zero) then int, inline: the shaders' colours are finite and far
+/// below 2^31, where a - trunc(a) is exact.
+int round_colour(float c) {
+  const float a = std::fabs(c);
+  const int t = static_cast<int>(a);
+  const int r = a - static_cast<float>(t) >= 0.5f ? t + 1 : t;
+  return c < 0 ? -r : r;
+}
+
+void write_pixel(const Target& t, int x, int y, float depth, const float colour[3]) {
+  const std::size_t i = t.index(x, y);
+  int& lo = t.span_lo[y - t.row0];
+  int& hi = t.span_hi[y - t.row0];
+  lo = std::min(lo, x);
+  hi = std::max(hi, x);
   t.depth[i] = depth;
   for (int c = 0; c < 3; ++c) {
-    t.rgba[i * 4 + c] = static_cast<std::uint8_t>(static_cast<int>(std::roundf(colour[c])));
+    t.rgba[i * 4 + c] = static_cast<std::uint8_t>(round_colour(colour[c]));
   }
   t.rgba[i * 4 + 3] = 255;
 }
@@ -428,78 +453,67 @@ struct FaceShader {
   static constexpr float kDiffuse = 0.6f;  // _materialDiffuse (white light)
 };
 
-/// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
-/// writes each pixel at most once, so the order within a face does not matter).
-void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceShader& shader) {
-  float lo[2] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
-  float hi[2] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
-  const float clamp[2] = {static_cast<float>(t.width - 1), static_cast<float>(t.height - 1)};
+/// A face's pixel box as mmetric's rasterize loop bounds it: corners' screen positions,
+/// clamped to the image; rows and columns [int(lo), int(hi)].
+struct PixelBox {
+  float lo[2], hi[2];
+};
+PixelBox pixel_box(const F4 pts[3], int width, int height) {
+  PixelBox b{{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()},
+             {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}};
+  const float clamp[2] = {static_cast<float>(width - 1), static_cast<float>(height - 1)};
   for (int i = 0; i < 3; ++i) {
     const float p[2] = {pts[i].x / pts[i].w, pts[i].y / pts[i].w};
     for (int j = 0; j < 2; ++j) {
-      lo[j] = std::max(0.0f, std::min(lo[j], p[j]));
-      hi[j] = std::min(clamp[j], std::max(hi[j], p[j]));
+      b.lo[j] = std::max(0.0f, std::min(b.lo[j], p[j]));
+      b.hi[j] = std::min(clamp[j], std::max(b.hi[j], p[j]));
     }
   }
+  return b;
+}
+
+/// Four floats per instruction (SSE on every x86-64; a compiler splits them elsewhere): each
+/// lane is IEEE single-precision arithmetic on its own pixel, the scalar expression's value.
+using Floats = float __attribute__((vector_size(16)));
+constexpr int kLanes = 4;
+
+/// One face, as mmetric's rasterize loop body (pixels in rows instead of columns: a face
+/// writes each pixel at most once, so the order within a face does not matter), on the
+/// target's rows only (a pixel's values do not depend on which others are drawn), four pixels
+/// of a row computed at once.
+void draw_face(const Target& t, const F4 clip[3], const F4 pts[3], const FaceShader& shader) {
+  const PixelBox box = pixel_box(pts, t.width, t.height);
   // u = cross((p2x - p0x, p1x - p0x, p0x - x), (p2y - p0y, p1y - p0y, p0y - y)).
   const float ax = pts[2].x - pts[0].x, ay = pts[1].x - pts[0].x;
   const float bx = pts[2].y - pts[0].y, by = pts[1].y - pts[0].y;
   const float uz = ax * by - bx * ay;
   const float z0 = clip[0].z, z1 = clip[1].z, z2 = clip[2].z;
   const float w0 = pts[0].w, w1 = pts[1].w, w2 = pts[2].w;
-  for (int y = static_cast<int>(lo[1]); y <= static_cast<int>(hi[1]); ++y) {
+  const int y_end = std::min(static_cast<int>(box.hi[1]), t.last_row());
+  const int x_lo = static_cast<int>(box.lo[0]), x_hi = static_cast<int>(box.hi[0]);
+  for (int y = std::max(static_cast<int>(box.lo[1]), t.row0); y <= y_end; ++y) {
     const float bz = pts[0].y - static_cast<float>(y);
-    for (int x = static_cast<int>(lo[0]); x <= static_cast<int>(hi[0]); ++x) {
-      const float az = pts[0].x - static_cast<float>(x);
-      const float ux = ay * bz - by * az;
-      const float uy = az * bx - bz * ax;
-      const float s0 = 1.f - (ux + uy) / uz, s1 = uy / uz, s2 = ux / uz;
-      const float c0 = s0 / w0, c1 = s1 / w1, c2 = s2 / w2;
-      const float depth = z0 * c0 + z1 * c1 + z2 * c2;
-      if (std::isnan(depth)) continue;
-      const std::size_t i = static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width;
-      if (s0 < 0 || s1 < 0 || s2 < 0 || depth <= t.depth[i]) continue;
-      float rgb[3];
-      shader.shade(c0, c1, c2, rgb);
-      write_pixel(t, i, depth, rgb);
+    for (int x = x_lo; x <= x_hi; x += kLanes) {
+      const Floats xs = {static_cast<float>(x), static_cast<float>(x + 1),
+                         static_cast<float>(x + 2), static_cast<float>(x + 3)};
+      const Floats az = pts[0].x - xs;
+      const Floats ux = ay * bz - by * az;
+      const Floats uy = az * bx - bz * ax;
+      const Floats s0 = 1.f - (ux + uy) / uz, s1 = uy / uz, s2 = ux / uz;
+      const Floats c0 = s0 / w0, c1 = s1 / w1, c2 = s2 / w2;
+      const Floats depth = z0 * c0 + z1 * c1 + z2 * c2;
+      // Inside (barycentrics >= 0) with a depth (a NaN barycentric makes the depth NaN).
+      const auto inside = (s0 >= 0) & (s1 >= 0) & (s2 >= 0) & (depth == depth);
+      if (!(inside[0] | inside[1] | inside[2] | inside[3])) continue;
+      for (int l = 0; l < kLanes && x + l <= x_hi; ++l) {
+        if (!inside[l]) continue;
+        const std::size_t i = t.index(x + l, y);
+        if (depth[l] <= t.depth[i]) continue;
+        float rgb[3];
+        shader.shade(c0[l], c1[l], c2[l], rgb);
+        write_pixel(t, x + l, y, depth[l], rgb);
+      }
     }
-  }
-}
-
-void draw_mesh(const Target& t, const RenderModel& m, const Camera& cam,
-               const RasterOptions& options) {
-  const bool coloured = !m.colors_255.empty();
-  const bool lit = options.lighting == Lighting::kHeadlight && m.normals.size() == m.positions.size();
-  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-    const Triangle& tri = m.triangles[f];
-    F4 clip[3];
-    for (int k = 0; k < 3; ++k) {
-      const Float3& p = m.positions[tri[k]];
-      clip[k] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
-    }
-    if (options.culling) {  // clockwise faces culled (mmetric's default cwCulling)
-      const F3 e1{clip[1].x - clip[0].x, clip[1].y - clip[0].y, clip[1].z - clip[0].z};
-      const F3 e2{clip[2].x - clip[0].x, clip[2].y - clip[0].y, clip[2].z - clip[0].z};
-      if (detail::cross(e1, e2).z <= 0) continue;
-    }
-    const F4 pts[3] = {detail::mul(cam.viewport, clip[0]), detail::mul(cam.viewport, clip[1]),
-                       detail::mul(cam.viewport, clip[2])};
-    FaceShader shader;
-    F3 colour[3], normal[3];
-    if (m.is_textured()) {
-      shader.texture = &(*m.textures)[m.triangle_texture[f]];
-      for (int k = 0; k < 3; ++k) shader.uv[k] = {m.uvs[tri[k]][0], m.uvs[tri[k]][1], 0};
-    } else if (coloured) {
-      for (int k = 0; k < 3; ++k) colour[k] = f3(m.colors_255[tri[k]]);
-      shader.colour = colour;
-    }
-    if (lit) {
-      for (int k = 0; k < 3; ++k) normal[k] = f3(m.normals[tri[k]]);
-      shader.normal = normal;
-      shader.towards_camera = cam.towards_camera;
-      shader.two_sided = !options.culling;
-    }
-    draw_face(t, clip, pts, shader);
   }
 }
 
@@ -509,7 +523,7 @@ struct Splat {
   int x0, y0, x1, y1;
 };
 
-Splat splat_of(const Float3& p, const Camera& cam, const Target& t, float half_px) {
+Splat splat_of(const Float3& p, const Camera& cam, int width, int height, float half_px) {
   const F4 clip = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
   const F4 pt = detail::mul(cam.viewport, clip);
   Splat s;
@@ -518,48 +532,175 @@ Splat splat_of(const Float3& p, const Camera& cam, const Target& t, float half_p
   s.depth = clip.z;
   s.x0 = static_cast<int>(std::max(0.0f, std::ceil(s.px - half_px)));
   s.y0 = static_cast<int>(std::max(0.0f, std::ceil(s.py - half_px)));
-  s.x1 = static_cast<int>(std::min(static_cast<float>(t.width - 1), std::floor(s.px + half_px)));
-  s.y1 = static_cast<int>(std::min(static_cast<float>(t.height - 1), std::floor(s.py + half_px)));
+  s.x1 = static_cast<int>(std::min(static_cast<float>(width - 1), std::floor(s.px + half_px)));
+  s.y1 = static_cast<int>(std::min(static_cast<float>(height - 1), std::floor(s.py + half_px)));
   return s;
 }
 
-/// Calls f(pixel index, squared screen distance to the centre) for each pixel of the footprint.
+/// Calls f(x, y, squared screen distance to the centre) for each pixel of the footprint in
+/// rows [row0, row_end].
 template <class F>
-void for_each_pixel(const Splat& s, const Target& t, float half_px, bool disc, F&& f) {
-  for (int y = s.y0; y <= s.y1; ++y) {
+void for_each_pixel(const Splat& s, int row0, int row_end, float half_px, bool disc, F&& f) {
+  for (int y = std::max(s.y0, row0); y <= std::min(s.y1, row_end); ++y) {
     const float dy = static_cast<float>(y) - s.py;
     for (int x = s.x0; x <= s.x1; ++x) {
       const float dx = static_cast<float>(x) - s.px;
       const float d2 = dx * dx + dy * dy;
       if (disc && d2 > half_px * half_px) continue;
-      f(static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * t.width, d2);
+      f(x, y, d2);
     }
   }
 }
 
-/// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
-/// Botsch et al. 2005): pass 1 finds the nearest depth that footprints of twice the splat size
-/// reach (on a half-resolution buffer); pass 2 colours a pixel with the point whose centre is nearest to it among the points
-/// within two splat sizes of that front depth (ties: the first in canonical order; two sizes
-/// let a surface tilted up to about 60 degrees through). So the back
-/// of an object does not show through the gaps between front splats (a gap stays empty), and
-/// colours are not blocks of splat size.
-void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
-  const float half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
-  const bool disc = m.splat_shape == SplatShape::kDisc;
+/// Items (faces or splats) listed per band of rows, in their order (a pixel sees the items that
+/// reach it in the order a whole-image pass would: the same ties).
+struct Bins {
+  std::vector<std::uint32_t> start, items;
+  std::vector<std::array<int, 2>> ranges;
+  /// rows(i) = {first, last} row of item i (first > last: none).
+  template <class Rows>
+  void fill(std::size_t count, int band_rows, int bands, Rows rows) {
+    start.assign(static_cast<std::size_t>(bands) + 1, 0);
+    ranges.resize(count);
+    for (std::size_t i = 0; i < count; ++i) ranges[i] = rows(i);
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::array<int, 2> r = ranges[i];
+        if (r[0] > r[1]) continue;
+        for (int b = r[0] / band_rows; b <= r[1] / band_rows; ++b) {
+          if (pass == 0) {
+            ++start[static_cast<std::size_t>(b) + 1];
+          } else {
+            items[next[static_cast<std::size_t>(b)]++] = static_cast<std::uint32_t>(i);
+          }
+        }
+      }
+      if (pass == 0) {
+        for (int b = 0; b < bands; ++b) start[b + 1] += start[b];
+        items.resize(start.back());
+      }
+    }
+  }
+};
+
+}  // namespace
+
+namespace detail {
+
+/// One model in one view (BandRaster's state): the camera, the vertices' clip coordinates
+/// (meshes) or the splats and the front depths of pass 1 (clouds), the items per band.
+struct BandRaster::State {
+  const RenderModel* model = nullptr;
+  RasterOptions options;
+  Camera cam;
+  int width = 0, height = 0, band_rows = 0, bands = 0;
+  Bins bins;
+  std::vector<F4> clip, screen;  // meshes: per vertex
+  std::vector<Splat> splats;     // clouds
+  std::vector<float> front, nearest;
+  std::vector<int> span_lo, span_hi;  // the last band drawn
+  int w2 = 0;
+  float half_px = 0, epsilon = 0;
+
+  void prepare_mesh();
+  void draw_mesh(const Target& t) const;
+  void prepare_splats();
+  void draw_splats(const Target& t);
+};
+
+/// The faces not culled (clockwise faces culled: mmetric's default cwCulling), by rows.
+void BandRaster::State::prepare_mesh() {
+  const RenderModel& m = *model;
+  clip.resize(m.positions.size());
+  screen.resize(m.positions.size());
+  for (std::size_t v = 0; v < clip.size(); ++v) {
+    const Float3& p = m.positions[v];
+    clip[v] = detail::mul(cam.mvp, F4{p[0], p[1], p[2], 1.0f});
+    screen[v] = detail::mul(cam.viewport, clip[v]);
+  }
+  bins.fill(m.triangles.size(), band_rows, bands, [&](std::size_t f) -> std::array<int, 2> {
+    const Triangle& tri = m.triangles[f];
+    const F4 c[3] = {clip[tri[0]], clip[tri[1]], clip[tri[2]]};
+    if (options.culling) {
+      const F3 e1{c[1].x - c[0].x, c[1].y - c[0].y, c[1].z - c[0].z};
+      const F3 e2{c[2].x - c[0].x, c[2].y - c[0].y, c[2].z - c[0].z};
+      if (detail::cross(e1, e2).z <= 0) return {1, 0};
+    }
+    const F4 pts[3] = {screen[tri[0]], screen[tri[1]], screen[tri[2]]};
+    const PixelBox box = pixel_box(pts, width, height);
+    const int lo = std::max(static_cast<int>(box.lo[1]), 0);
+    const int hi = std::min(static_cast<int>(box.hi[1]), height - 1);
+    return {lo, hi};
+  });
+}
+
+/// Faces fetched ahead while drawing.
+constexpr std::size_t kAhead = 8;
+
+void BandRaster::State::draw_mesh(const Target& t) const {
+  const RenderModel& m = *model;
   const bool coloured = !m.colors_255.empty();
+  const bool lit =
+      options.lighting == Lighting::kHeadlight && m.normals.size() == m.positions.size();
+  const std::size_t band = static_cast<std::size_t>(t.row0 / band_rows);
+  const std::size_t end = bins.start[band + 1];
+  for (std::size_t k = bins.start[band]; k < end; ++k) {
+    // The faces of a band lie scattered in the canonical order: fetch ahead (no effect on values).
+    if (k + 2 * kAhead < end) __builtin_prefetch(&m.triangles[bins.items[k + 2 * kAhead]]);
+    if (k + kAhead < end) {
+      for (std::uint32_t v : m.triangles[bins.items[k + kAhead]]) {
+        __builtin_prefetch(&clip[v]);
+        __builtin_prefetch(&screen[v]);
+        if (coloured) __builtin_prefetch(&m.colors_255[v]);
+      }
+    }
+    const std::uint32_t f = bins.items[k];
+    const Triangle& tri = m.triangles[f];
+    const F4 c[3] = {clip[tri[0]], clip[tri[1]], clip[tri[2]]};
+    const F4 pts[3] = {screen[tri[0]], screen[tri[1]], screen[tri[2]]};
+    FaceShader shader;
+    F3 colour[3], normal[3];
+    if (m.is_textured()) {
+      shader.texture = &(*m.textures)[m.triangle_texture[f]];
+      for (int i = 0; i < 3; ++i) shader.uv[i] = {m.uvs[tri[i]][0], m.uvs[tri[i]][1], 0};
+    } else if (coloured) {
+      for (int i = 0; i < 3; ++i) colour[i] = f3(m.colors_255[tri[i]]);
+      shader.colour = colour;
+    }
+    if (lit) {
+      for (int i = 0; i < 3; ++i) normal[i] = f3(m.normals[tri[i]]);
+      shader.normal = normal;
+      shader.towards_camera = cam.towards_camera;
+      shader.two_sided = !options.culling;
+    }
+    draw_face(t, c, pts, shader);
+  }
+}
+
+/// Splats in two passes (an epsilon-z-buffer, as surface splatting does: Pfister et al. 2000,
+/// Botsch et al. 2005): pass 1 (here, over the whole view) finds the nearest depth that
+/// footprints of twice the splat size reach (on a half-resolution buffer); pass 2 (draw_splats,
+/// band by band) colours a pixel with the point whose centre is nearest to it among the points
+/// within two splat sizes of that front depth (ties: the first in canonical order; two sizes
+/// let a surface tilted up to about 60 degrees through). So the back of an object does not show
+/// through the gaps between front splats (a gap stays empty), and colours are not blocks of
+/// splat size.
+void BandRaster::State::prepare_splats() {
+  const RenderModel& m = *model;
+  half_px = std::max(1.0f, m.splat_size * cam.pixels_per_unit) / 2;
+  const bool disc = m.splat_shape == SplatShape::kDisc;
   // Two splat sizes in depth units (the frame's diameter spans depth_range).
-  const float epsilon = 2 * m.splat_size * cam.depth_range * cam.pixels_per_unit /
-                        static_cast<float>(t.width);
+  epsilon = 2 * m.splat_size * cam.depth_range * cam.pixels_per_unit / static_cast<float>(width);
   // Pass 1 with footprints twice as wide, on a depth buffer of half the resolution (each of its
   // cells a 2 x 2 block of pixels, a quarter of the work): a gap between the front's splats
   // (where no point landed) still gets the front's depth, so that the back does not fill it.
-  const int w2 = (t.width + 1) / 2, h2 = (t.height + 1) / 2;
-  std::vector<float> front(static_cast<std::size_t>(w2) * h2, -FLT_MAX);
-  const Target coarse{w2, h2, nullptr, front.data()};
-  std::vector<Splat> splats(m.positions.size());
+  w2 = (width + 1) / 2;
+  const int h2 = (height + 1) / 2;
+  front.assign(static_cast<std::size_t>(w2) * h2, -FLT_MAX);
+  splats.resize(m.positions.size());
   for (std::size_t i = 0; i < splats.size(); ++i) {
-    splats[i] = splat_of(m.positions[i], cam, t, half_px);
+    splats[i] = splat_of(m.positions[i], cam, width, height, half_px);
     // In the coarse buffer's units: a cell's centre at (X + 1/4, Y + 1/4), the splat's radius
     // 2 half_px / 2 = half_px, grown by a cell's half diagonal so that a cell is reached when
     // any of its pixels is.
@@ -572,27 +713,45 @@ void draw_splats(const Target& t, const RenderModel& m, const Camera& cam) {
     wide.x1 = static_cast<int>(std::min(static_cast<float>(w2 - 1), std::floor(wide.px + radius)));
     wide.y1 = static_cast<int>(std::min(static_cast<float>(h2 - 1), std::floor(wide.py + radius)));
     const float z = wide.depth;
-    for_each_pixel(wide, coarse, radius, disc, [&](std::size_t k, float) {
-      if (z > front[k]) front[k] = z;
+    for_each_pixel(wide, 0, h2 - 1, radius, disc, [&](int x, int y, float) {
+      float& f = front[static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * w2];
+      if (z > f) f = z;
     });
   }
-  const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.height);
-  std::vector<float> nearest(n, std::numeric_limits<float>::infinity());
-  for (std::size_t i = 0; i < splats.size(); ++i) {
+  bins.fill(splats.size(), band_rows, bands, [&](std::size_t i) -> std::array<int, 2> {
+    return {splats[i].y0, splats[i].y1};
+  });
+}
+
+void BandRaster::State::draw_splats(const Target& t) {
+  const RenderModel& m = *model;
+  const bool disc = m.splat_shape == SplatShape::kDisc;
+  const bool coloured = !m.colors_255.empty();
+  nearest.assign(static_cast<std::size_t>(t.width) * t.rows,
+                 std::numeric_limits<float>::infinity());
+  const std::size_t band = static_cast<std::size_t>(t.row0 / band_rows);
+  const std::size_t end = bins.start[band + 1];
+  for (std::size_t k = bins.start[band]; k < end; ++k) {
+    if (k + kAhead < end) {  // the points of a band lie scattered in the canonical order
+      __builtin_prefetch(&splats[bins.items[k + kAhead]]);
+      if (coloured) __builtin_prefetch(&m.colors_255[bins.items[k + kAhead]]);
+    }
+    const std::uint32_t i = bins.items[k];
     const Splat& s = splats[i];
     const float rgb[3] = {coloured ? m.colors_255[i][0] : 255.0f,
                           coloured ? m.colors_255[i][1] : 0.0f,
                           coloured ? m.colors_255[i][2] : 0.0f};
-    for_each_pixel(s, t, half_px, disc, [&](std::size_t k, float d2) {
-      const std::size_t x = k % static_cast<std::size_t>(t.width), y = k / t.width;
-      if (s.depth < front[(y / 2) * w2 + x / 2] - epsilon || !(d2 < nearest[k])) return;
-      nearest[k] = d2;
-      write_pixel(t, k, s.depth, rgb);
+    for_each_pixel(s, t.row0, t.last_row(), half_px, disc, [&](int x, int y, float d2) {
+      const std::size_t p = t.index(x, y);
+      const std::size_t f = static_cast<std::size_t>(y / 2) * w2 + static_cast<std::size_t>(x / 2);
+      if (s.depth < front[f] - epsilon || !(d2 < nearest[p])) return;
+      nearest[p] = d2;
+      write_pixel(t, x, y, s.depth, rgb);
     });
   }
 }
 
-}  // namespace
+}  // namespace detail
 
 std::vector<Float3> cmdm18_directions() {
   const float d = static_cast<float>(1 / std::sqrt(2.0));
@@ -601,27 +760,76 @@ std::vector<Float3> cmdm18_directions() {
           {-d, 0, d}, {-d, 0, -d}, {0, d, d}, {0, d, -d},  {0, -d, d}, {0, -d, -d}};
 }
 
-View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
-                 const RasterOptions& options) {
+namespace detail {
+
+BandRaster::BandRaster() : state_(std::make_unique<State>()) {}
+BandRaster::~BandRaster() = default;
+
+void BandRaster::prepare(const RenderModel& model, const Frame& frame, const Float3& direction,
+                         const RasterOptions& options, int band_rows) {
   if (options.resolution < 1) {
     throw std::invalid_argument("resolution: at least 1 pixel (got " +
                                 std::to_string(options.resolution) + ")");
   }
+  State& s = *state_;
+  s.model = &model;
+  s.options = options;
+  s.width = s.height = options.resolution;
+  s.band_rows = std::max(1, std::min(band_rows, s.height));
+  s.bands = (s.height + s.band_rows - 1) / s.band_rows;
+  s.cam = camera_for(frame, f3(direction), s.width, s.height);
+  if (model.is_cloud()) {
+    s.prepare_splats();
+  } else {
+    s.prepare_mesh();
+  }
+}
+
+int BandRaster::width() const { return state_->width; }
+int BandRaster::height() const { return state_->height; }
+int BandRaster::bands() const { return state_->bands; }
+int BandRaster::band_row0(int band) const { return band * state_->band_rows; }
+int BandRaster::band_rows(int band) const {
+  return std::min(state_->band_rows, state_->height - band_row0(band));
+}
+float BandRaster::depth_range() const { return state_->cam.depth_range; }
+std::array<int, 2> BandRaster::drawn_columns(int row) const {
+  return {state_->span_lo[static_cast<std::size_t>(row)],
+          state_->span_hi[static_cast<std::size_t>(row)]};
+}
+
+void BandRaster::draw(int band, std::uint8_t* rgba, float* depth) {
+  State& s = *state_;
+  s.span_lo.assign(static_cast<std::size_t>(s.band_rows), s.width);
+  s.span_hi.assign(static_cast<std::size_t>(s.band_rows), -1);
+  const Target t{s.width, s.height, band_row0(band),  band_rows(band),
+                 rgba,    depth,    s.span_lo.data(), s.span_hi.data()};
+  const std::size_t n = static_cast<std::size_t>(t.width) * static_cast<std::size_t>(t.rows);
+  std::fill(rgba, rgba + 4 * n, std::uint8_t{0});
+  std::fill(depth, depth + n, -FLT_MAX);  // RendererSw's clear depth
+  if (s.model->is_cloud()) {
+    s.draw_splats(t);
+  } else {
+    s.draw_mesh(t);
+  }
+}
+
+}  // namespace detail
+
+View render_view(const RenderModel& model, const Frame& frame, const Float3& direction,
+                 const RasterOptions& options) {
+  detail::BandRaster raster;
+  raster.prepare(model, frame, direction, options, options.resolution);
   View v;
-  v.width = v.height = options.resolution;
+  v.width = raster.width();
+  v.height = raster.height();
   const std::size_t n = static_cast<std::size_t>(v.width) * static_cast<std::size_t>(v.height);
   reserve_with_huge_pages(v.rgba, n * 4);
   reserve_with_huge_pages(v.depth, n);
-  v.rgba.assign(n * 4, 0);
-  v.depth.assign(n, -FLT_MAX);  // RendererSw's clear depth
-  const Camera cam = camera_for(frame, f3(direction), v.width, v.height);
-  v.depth_range = cam.depth_range;
-  const Target t{v.width, v.height, v.rgba.data(), v.depth.data()};
-  if (model.is_cloud()) {
-    draw_splats(t, model, cam);
-  } else {
-    draw_mesh(t, model, cam, options);
-  }
+  v.rgba.resize(n * 4);
+  v.depth.resize(n);
+  v.depth_range = raster.depth_range();
+  raster.draw(0, v.rgba.data(), v.depth.data());
   return v;
 }
 
