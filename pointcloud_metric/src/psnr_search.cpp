@@ -83,6 +83,15 @@ struct PointColumns::Best {
   bool beyond(double e2) const { return e2 * (1 - kShrink) > worst; }
 };
 
+inline double PointColumns::cell(double x, int axis) const { return (x - origin_[axis]) / h_; }
+
+// The gap, in column widths, between a query at `u` and column `i` along one axis (0 in it),
+// less the rounding of cell() (below kSlack for |u| < kFar).
+inline double PointColumns::gap_to(double u, long i) {
+  const double gap = u < i ? i - u : u - (i + 1);
+  return std::max(0.0, gap - kSlack);
+}
+
 PointColumns::PointColumns(const std::vector<Point3f>& points) {
   const std::size_t n = points.size();
   double lo[3], hi[3];
@@ -142,15 +151,6 @@ bool PointColumns::settled_by_distance(const Point3f& q, const Best& best, std::
   return true;
 }
 
-double PointColumns::cell(double x, int axis) const { return (x - origin_[axis]) / h_; }
-
-// The gap, in column widths, between a query at `u` and column `i` along one axis (0 in it),
-// less the rounding of cell() (below kSlack for |u| < kFar).
-double PointColumns::gap_to(double u, long i) {
-  const double gap = u < i ? i - u : u - (i + 1);
-  return std::max(0.0, gap - kSlack);
-}
-
 // Adds the points of column `col` that may be nearer than best's worst: scanned outwards from
 // the query along the sorted axis, each way until the gap along that axis alone is farther.
 void PointColumns::scan_column(const Point3f& q, std::size_t col, Best& best) const {
@@ -158,8 +158,15 @@ void PointColumns::scan_column(const Point3f& q, std::size_t col, Best& best) co
   const double qc = q[c];
   const auto first = entries_.begin() + start_[col];
   const auto last = entries_.begin() + start_[col + 1];
-  if (last - first <= kLinearScan) {
-    for (auto it = first; it != last; ++it) best.add(column_distance2(q, it->p), &*it);
+  if (last - first <= kLinearScan) {  // ascending: skip those below, stop above
+    for (auto it = first; it != last; ++it) {
+      const double gap = double(it->p[c]) - qc;
+      if (best.beyond(gap * gap)) {
+        if (gap > 0) break;
+        continue;
+      }
+      best.add(column_distance2(q, it->p), &*it);
+    }
     return;
   }
   const auto mid = std::partition_point(first, last, [&](const Entry& e) { return e.p[c] < qc; });
@@ -195,8 +202,8 @@ void PointColumns::search_ring(const Point3f& q, double ua, double ub, long ring
   }
 }
 
-bool PointColumns::knn(const Point3f& q, std::size_t k, std::uint32_t* indices,
-                       double* distances2) const {
+bool PointColumns::knn(const Point3f& q, std::size_t k, std::uint32_t* indices, double* distances2,
+                       double* next) const {
   if (entries_.size() <= k) return false;
   const double ua = cell(q[axis_[0]], 0), ub = cell(q[axis_[1]], 1);
   if (!(std::fabs(ua) < kFar && std::fabs(ub) < kFar)) return false;
@@ -213,6 +220,7 @@ bool PointColumns::knn(const Point3f& q, std::size_t k, std::uint32_t* indices,
       indices[j] = best.e[j]->index;
       distances2[j] = best.d[j];
     }
+    if (next != nullptr) *next = best.d[k];
     return true;
   }
   return false;

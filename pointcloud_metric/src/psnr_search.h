@@ -36,10 +36,11 @@ class PointColumns {
  public:
   explicit PointColumns(const std::vector<Point3f>& points);
 
-  /// The k nearest points to `query` (k <= kMaxNeighbours) in the tree's order when they are
+  /// The k nearest points to `query` (k < kMaxNeighbours) in the tree's order when they are
   /// settled by distance alone (see the exactness argument above): writes them and returns
-  /// true; false when the tree must answer.
-  bool knn(const Point3f& query, std::size_t k, std::uint32_t* indices, double* distances2) const;
+  /// true; false when the tree must answer. `next` (may be null): the (k+1)-th distance.
+  bool knn(const Point3f& query, std::size_t k, std::uint32_t* indices, double* distances2,
+           double* next = nullptr) const;
 
   std::size_t size() const { return entries_.size(); }
 
@@ -86,10 +87,14 @@ class PsnrSearch {
     if (!grid_ || grid_->size() <= first) {
       return tree().tie_run_knn(query, first, expand, tied, indices, distances2);
     }
-    if (!grid_->knn(query, 2, indices, distances2)) {
+    // The tree's first is the grid's (settled), and its second distance is at least the
+    // grid's second, g1: `tied` (monotone: |y - x| < threshold, or x == y) not holding at g1
+    // holds at no larger distance, so the tree's answer is that first alone.
+    double next = 0;
+    if (!grid_->knn(query, 1, indices, distances2, &next)) {
       return tree().tie_run_knn(query, first, expand, tied, indices, distances2);
     }
-    if (!tied(distances2[0], distances2[1])) return 1;
+    if (!tied(distances2[0], next)) return 1;
     // All `first` distances different: the tree's expanding query stops at `first` (it grows
     // only while the first and the last are equal), and its answer is the first-NN list.
     if (grid_->knn(query, first, indices, distances2)) return first;

@@ -72,7 +72,10 @@ void expect_search_is_tree(const std::vector<Point3f>& points, const std::vector
                            double threshold) {
   const PsnrSearch search(points, &queries, threshold);
   const MpegTree tree(points);
-  const auto tied = [threshold](double x, double y) { return std::fabs(y - x) < threshold; };
+  // The passes' tie test, and the normals transfer's (exactly equal) when threshold is 0.
+  const auto tied = [threshold](double x, double y) {
+    return threshold > 0 ? std::fabs(y - x) < threshold : x == y;
+  };
   for (std::size_t q = 0; q < queries.size(); ++q) {
     std::uint32_t si[kMaxNeighbours], ti[kMaxNeighbours];
     double sd[kMaxNeighbours], td[kMaxNeighbours];
@@ -99,6 +102,7 @@ TEST(PsnrSearch, GridAnswersAreTheTreesOnARandomCloud) {
   }
   expect_search_is_tree(b, a, 1e-8);
   expect_search_is_tree(b, a, 1e-3);  // most first two tied: the run of ten from the grid
+  expect_search_is_tree(b, a, 0);
 }
 
 TEST(PsnrSearch, GridAnswersAreTheTreesOnAVoxelisedCloudWithTies) {
@@ -117,6 +121,7 @@ TEST(PsnrSearch, GridAnswersAreTheTreesWithDuplicates) {
   for (std::size_t k : {1, 2, 3}) expect_grid_is_tree(b, a, k);
   expect_search_is_tree(b, a, 1e-8);
   expect_search_is_tree(b, b, 1e-8);  // each point's own duplicate at distance 0
+  expect_search_is_tree(b, b, 0);
 }
 
 TEST(PsnrSearch, GridAnswersAreTheTreesFarFromTheOrigin) {
