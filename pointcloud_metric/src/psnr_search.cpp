@@ -238,9 +238,10 @@ PsnrSearch::PsnrSearch(const std::vector<Point3f>& points, const std::vector<Poi
     std::uint32_t idx[kSampleRun];
     double d2[kSampleRun];
     const Point3f& q = (*queries)[s * step];
-    if (!grid_->knn(q, 2, idx, d2)) {
+    double next = 0;
+    if (!grid_->knn(q, 1, idx, d2, &next)) {
       ++to_tree;
-    } else if (!(d2[1] - d2[0] >= tie_threshold) && !grid_->knn(q, kSampleRun, idx, d2)) {
+    } else if (!(next - d2[0] >= tie_threshold) && !grid_->knn(q, kSampleRun, idx, d2)) {
       ++to_tree;
     }
   }

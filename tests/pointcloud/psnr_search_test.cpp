@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <random>
+#include <thread>
 
 namespace qm3d::pointcloud::detail {
 namespace {
@@ -131,6 +132,33 @@ TEST(PsnrSearch, GridAnswersAreTheTreesFarFromTheOrigin) {
     EXPECT_GT(expect_grid_is_tree(b, a, k), a.size() / 2) << "k " << k;
   }
   expect_search_is_tree(b, a, 1e-8);
+}
+
+TEST(PsnrSearch, TheTreeBuiltOnFirstUseFromTwoThreads) {
+  std::vector<Point3f> b = sphere(20000, 1.0f, {0, 0, 0}, 11);
+  for (std::size_t i = 0; i < 100; ++i) b.push_back(b[i * 97 + 5]);  // a few need the tree
+  const std::vector<Point3f> a = jittered(b, 0.0001f, 12);
+  const PsnrSearch search(b, &a, 1e-8);
+  ASSERT_TRUE(search.uses_grid());
+  const MpegTree tree(b);
+  std::vector<std::uint32_t> found[2];
+  const auto run = [&](int t) {
+    for (std::size_t q = t; q < a.size(); q += 2) {
+      std::uint32_t idx[kMaxNeighbours];
+      double d2[kMaxNeighbours];
+      search.knn(a[q], 1, idx, d2);
+      found[t].push_back(idx[0]);
+    }
+  };
+  std::thread other(run, 1);
+  run(0);
+  other.join();
+  for (std::size_t q = 0; q < a.size(); ++q) {
+    std::uint32_t idx[1];
+    double d2[1];
+    tree.knn(a[q], 1, idx, d2);
+    ASSERT_EQ(found[q % 2][q / 2], idx[0]) << "query " << q;
+  }
 }
 
 TEST(PsnrSearch, QueriesOutsideTheGridAndFlatClouds) {
