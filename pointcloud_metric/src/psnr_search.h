@@ -29,14 +29,14 @@
 
 namespace qm3d::pointcloud::detail {
 
-/// The points sorted into columns along the two longest axes of their bounding box, each column
-/// sorted along the third axis (a counting sort, then small sorts). Queries search the columns
-/// around the query within a growing radius.
+/// The points sorted into columns across x and the longer of y and z (a counting sort), each
+/// column sorted along the third axis. A query scans its column, then rings of columns around
+/// it, skipping columns and points that cannot be among its k + 1 nearest.
 class PointColumns {
  public:
   explicit PointColumns(const std::vector<Point3f>& points);
 
-  /// The k nearest points to `query` (k < kMaxNeighbours) in the tree's order when they are
+  /// The k nearest points to `query` (k <= kMaxNeighbours) in the tree's order when they are
   /// settled by distance alone (see the exactness argument above): writes them and returns
   /// true; false when the tree must answer. `next` (may be null): the (k+1)-th distance.
   bool knn(const Point3f& query, std::size_t k, std::uint32_t* indices, double* distances2,
