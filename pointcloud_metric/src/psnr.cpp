@@ -41,6 +41,7 @@
 #include "pca_normals.h"
 #include "psnr_engine.h"
 #include "psnr_reader.h"
+#include "psnr_search.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
@@ -53,8 +54,8 @@ namespace qm3d::pointcloud {
 using detail::Colour8;
 using detail::kMaxNeighbours;
 using detail::MpegCloud;
-using detail::MpegTree;
 using detail::Point3f;
+using detail::PsnrSearch;
 
 const std::vector<std::string>& psnr_value_names() {
   static const std::vector<std::string> names = {"d1_mse",
@@ -147,7 +148,7 @@ struct NnDistances {
   double max = DBL_MIN;  // D: findNNdistances starts at numeric_limits<double>::min()
 };
 
-NnDistances nn_distances(const MpegCloud& a, const MpegTree& tree, int threads) {
+NnDistances nn_distances(const MpegCloud& a, const PsnrSearch& tree, int threads) {
   const long n = static_cast<long>(a.size());
   NnDistances out;
 #pragma omp parallel num_threads(thread_count(threads))
@@ -186,8 +187,8 @@ std::size_t exact_ties(const std::uint32_t* idx, const double* d2, std::size_t f
 
 bool exactly_equal(double x, double y) { return x == y; }
 
-std::vector<Point3f> transfer_normals(const MpegCloud& na, const MpegTree& na_tree,
-                                      const MpegCloud& b, const MpegTree& b_tree, bool average,
+std::vector<Point3f> transfer_normals(const MpegCloud& na, const PsnrSearch& na_tree,
+                                      const MpegCloud& b, const PsnrSearch& b_tree, bool average,
                                       int threads) {
   const long n_a = static_cast<long>(na.size());
   const long n_b = static_cast<long>(b.size());
@@ -289,9 +290,9 @@ struct PointMatch {
 };
 
 // One point of A searched in B: its match, and its D2 error in `d2_point` (with normals).
-PointMatch match_point(const MpegCloud& a, std::size_t i, const MpegCloud& b, const MpegTree& tree,
-                       const std::vector<Point3f>* normals, const PassSettings& p,
-                       double* d2_point) {
+PointMatch match_point(const MpegCloud& a, std::size_t i, const MpegCloud& b,
+                       const PsnrSearch& tree, const std::vector<Point3f>* normals,
+                       const PassSettings& p, double* d2_point) {
   std::uint32_t idx[kMaxNeighbours];
   double d2[kMaxNeighbours];
   const Point3f& q = a.points[i];
@@ -380,7 +381,7 @@ PointErrors point_errors(const MpegCloud& a, std::size_t i, const MpegCloud& b, 
 // points (the same sums for any thread count). Searching in the query tree's leaf order instead
 // (spatially coherent queries, the matches kept for the sums in point order) was measured: no
 // faster here (the scattered reads and writes cost what the cache saves) and 8 bytes a point more.
-PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const MpegTree& b_tree,
+PassOutput run_pass(const MpegCloud& a, const MpegCloud& b, const PsnrSearch& b_tree,
                     const std::vector<Point3f>* normals, const PassSettings& p, int threads) {
   PassOutput out;
   out.points = a.size();
@@ -679,14 +680,19 @@ void compare_loaded(const MpegCloud& a, const MpegCloud& b, const MpegCloud& na,
   const bool d2 = !na.normals.empty();
 
   progress.begin("trees");
-  auto a_tree_task = std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
-                                [&] { return std::make_unique<MpegTree>(a.points); });
-  const MpegTree b_tree(b.points);
-  const std::unique_ptr<MpegTree> a_tree_owned = a_tree_task.get();
-  const MpegTree& a_tree = *a_tree_owned;
+  // Each cloud's search (psnr_search.h: a grid, pc_error's tree where needed), built
+  // concurrently; a sample of the queries decides between them.
+  const double threshold = conventions.tie_threshold;
+  auto a_tree_task =
+      std::async(options.threads == 1 ? std::launch::deferred : std::launch::async,
+                 [&] { return std::make_unique<PsnrSearch>(a.points, &b.points, threshold); });
+  const PsnrSearch b_tree(b.points, &a.points, threshold);
+  const std::unique_ptr<PsnrSearch> a_tree_owned = a_tree_task.get();
+  const PsnrSearch& a_tree = *a_tree_owned;
   const bool na_is_a = &na == &a || na.points == a.points;
-  const std::unique_ptr<MpegTree> na_tree =
-      d2 && !own_normals && !na_is_a ? std::make_unique<MpegTree>(na.points) : nullptr;
+  const std::unique_ptr<PsnrSearch> na_tree =
+      d2 && !own_normals && !na_is_a ? std::make_unique<PsnrSearch>(na.points, &b.points, threshold)
+                                     : nullptr;
 
   double peak = 0;
   if (peak_given) {
