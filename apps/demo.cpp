@@ -6,7 +6,7 @@
 #include <iostream>
 #include <optional>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 

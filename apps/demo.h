@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <ostream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/html_report.h"
 
 namespace qm3d::app {

@@ -17,7 +17,7 @@
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/evaluation/score_table.h"
 #include "train_command.h"
 

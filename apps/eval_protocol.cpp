@@ -12,7 +12,7 @@
 #include <set>
 #include <sstream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/eval_plot.h"
 #include "qm3d/common/error.h"
 #include "qm3d/evaluation/evaluation_protocol.h"

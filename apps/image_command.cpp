@@ -4,7 +4,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"

@@ -8,8 +8,8 @@
 #include <memory>
 #include <sstream>
 
-#include "batch.h"
-#include "commands.h"
+#include "qm3d/study/batch.h"
+#include "qm3d/scoring/score.h"
 #include "demo.h"
 #include "eval_commands.h"
 #include "help_format.h"

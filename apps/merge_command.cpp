@@ -4,8 +4,8 @@
 #include <iostream>
 #include <set>
 
-#include "batch.h"
-#include "batch_results.h"
+#include "qm3d/study/batch.h"
+#include "qm3d/study/batch_results.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 

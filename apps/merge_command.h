@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 namespace qm3d::app {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
 namespace qm3d::app {
 

@@ -1,6 +1,6 @@
 // Tests of apps/shard.h: --shard K/N parsing, the size-balanced partition and the merge of shard
 // results.
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 #include <gtest/gtest.h>
 

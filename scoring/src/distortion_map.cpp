@@ -1,4 +1,4 @@
-#include "distortion_map.h"
+#include "qm3d/scoring/distortion_map.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 #include <cctype>
 #include <charconv>

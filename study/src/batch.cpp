@@ -1,4 +1,4 @@
-#include "batch.h"
+#include "qm3d/study/batch.h"
 
 #include <omp.h>
 #include <sys/prctl.h>
@@ -20,8 +20,8 @@
 #include <thread>
 #include <tuple>
 
-#include "batch_results.h"
-#include "commands.h"
+#include "qm3d/study/batch_results.h"
+#include "qm3d/scoring/score.h"
 #include "pair_process.h"
 #include "progress_display.h"
 #include "qm3d/common/error.h"

@@ -10,7 +10,7 @@
 #include <tuple>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
 namespace qm3d::app {
 

@@ -1,8 +1,8 @@
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
 #include <iostream>
 
-#include "distortion_map.h"
+#include "qm3d/scoring/distortion_map.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 

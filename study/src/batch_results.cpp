@@ -1,4 +1,4 @@
-#include "batch_results.h"
+#include "qm3d/study/batch_results.h"
 
 #include <fcntl.h>
 #include <sys/file.h>

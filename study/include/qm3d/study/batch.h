@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/html_report.h"
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 namespace CLI {
 class App;
