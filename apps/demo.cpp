@@ -15,6 +15,7 @@
 #endif
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 

@@ -1,4 +1,5 @@
 #include "eval_commands.h"
+#include "emit_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +23,7 @@
 #include "train_command.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {

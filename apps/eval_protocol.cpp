@@ -1,4 +1,5 @@
 #include "eval_protocol.h"
+#include "emit_text.h"
 
 #include <algorithm>
 #include <cctype>
@@ -24,6 +25,7 @@
 #include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {

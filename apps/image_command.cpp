@@ -1,4 +1,5 @@
 #include "image_command.h"
+#include "emit_text.h"
 
 #include <chrono>
 #include <cstring>

@@ -11,6 +11,7 @@
 #include "qm3d/study/batch.h"
 #include "qm3d/scoring/score.h"
 #include "demo.h"
+#include "emit_text.h"
 #include "eval_commands.h"
 #include "help_format.h"
 #include "qm3d/report/html_report.h"
@@ -26,6 +27,7 @@
 #include "sample_commands.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 

@@ -12,6 +12,7 @@
 #include "qm3d/mesh/texture.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 namespace {
 
 constexpr double kMax8Bit = 255.0;

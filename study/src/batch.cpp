@@ -29,6 +29,7 @@
 #include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 

@@ -18,6 +18,7 @@
 #include "qm3d/common/result_io.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 namespace {
 
 constexpr std::size_t kStatusColumn = 4;

@@ -28,7 +28,7 @@ struct BatchOptions {
   bool retry_failed = false;     ///< with resume: score the error rows again (replacing them)
   bool overwrite = false;        ///< replace an existing `output`
   bool quiet = false;            ///< no progress on stderr
-  ScoreRequest request;          ///< run options (threads set per job) and metric options
+  scoring::ScoreRequest request;          ///< run options (threads set per job) and metric options
   std::optional<Shard> shard;    ///< score only this part of the pairs (--shard K/N)
   /// One HTML report per pair (report_file_name()) and an index of the results, sorted by score
   /// (index.html; index-K-of-N.html for a shard); empty = none. A pair's report holds the

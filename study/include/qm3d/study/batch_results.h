@@ -20,7 +20,7 @@ std::string batch_header(const std::vector<std::string>& value_names = {});
 /// The options a batch scores with, as one field: "key=value" items separated by spaces and
 /// sorted (metric options as given, direction, model=METRIC:w1/.../w8), or "defaults". The
 /// data folder and thread counts are not settings (they do not change a score).
-std::string batch_settings(const ScoreRequest& request);
+std::string batch_settings(const scoring::ScoreRequest& request);
 
 /// "radius: 0.01 in FILE, 0.02 in this run; ..." for the items of two settings that differ.
 std::string settings_difference(const std::string& recorded, const std::string& current,
