@@ -17,8 +17,8 @@
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
 
-namespace qm3d::app {
-using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
+namespace qm3d::study {
+using namespace qm3d::scoring;  // NOLINT: the scoring the study runs
 namespace {
 
 constexpr std::size_t kStatusColumn = 4;
@@ -336,4 +336,4 @@ std::size_t count_error_rows(const std::string& text) {
   return errors;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

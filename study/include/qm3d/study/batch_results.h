@@ -12,7 +12,7 @@
 
 #include "qm3d/scoring/score.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
 
 /// csv_header() and ",settings".
 std::string batch_header(const std::vector<std::string>& value_names = {});
@@ -86,4 +86,4 @@ std::string tidy_results(const std::string& text, const std::vector<RowKey>& ord
 /// The number of rows of a results text whose status is not "ok".
 std::size_t count_error_rows(const std::string& text);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study
