@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "qm3d/study/batch.h"
+#include "qm3d/study/batch_row.h"
 #include "qm3d/scoring/score.h"
 #include "demo.h"
 #include "emit_text.h"

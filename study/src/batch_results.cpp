@@ -16,6 +16,7 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/study/batch_row.h"
 
 namespace qm3d::study {
 using namespace qm3d::scoring;  // NOLINT: the scoring the study runs
