@@ -6,8 +6,9 @@
 #include <iostream>
 #include <optional>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/result_io.h"
 #include "qm3d/common/file_io.h"
 
 #ifndef QM3D_DEMO_DIR
@@ -15,6 +16,7 @@
 #endif
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
@@ -47,12 +49,6 @@ void row(std::ostream& out, const std::string& pair, const std::vector<std::stri
   out << std::left << std::setw(kPairWidth) << pair << std::right;
   for (const auto& c : cells) out << std::setw(kScoreWidth) << c;
   out << "\n";
-}
-
-std::string fixed(double v) {
-  std::ostringstream o;
-  o << std::setprecision(6) << v;
-  return o.str();
 }
 
 // The report's settings; unset (with a warning) when three.js is missing and no folder was asked
@@ -95,20 +91,14 @@ std::filesystem::path default_demo_dir() {
   return QM3D_DEMO_DIR;
 }
 
-int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
-             const ReportCli& report, bool quiet, std::ostream& out) {
-  if (!std::filesystem::is_directory(dir / "meshes")) {
-    throw InputError(dir.string() + ": bundled demo data not found (use --dir)");
-  }
-  const std::optional<ReportSettings> settings = demo_report_settings(report, quiet);
-  // One column per registered metric that applies to a bundled pair.
-  std::vector<std::pair<Input, Input>> inputs;
+namespace {
+
+using DemoInputs = std::vector<std::pair<Input, Input>>;
+
+// One column per registered metric that applies to a bundled pair. Metrics asked for by name
+// only (MetricSpec::in_compare false, e.g. ibsm's rendering) are left out, as in `compare`.
+std::vector<const MetricSpec*> demo_columns(const DemoInputs& inputs) {
   std::vector<const MetricSpec*> columns;
-  for (const auto& p : kPairs) {
-    inputs.emplace_back(default_registry().read(dir / p.reference), default_registry().read(dir / p.distorted));
-  }
-  // Metrics asked for by name only (MetricSpec::in_compare false, e.g. ibsm's rendering) are
-  // left out, as in `compare`.
   for (const auto& m : default_registry().metrics()) {
     if (!m.in_compare) continue;
     for (const auto& [ref, dist] : inputs) {
@@ -118,6 +108,11 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
       }
     }
   }
+  return columns;
+}
+
+void print_table_head(std::ostream& out, const std::filesystem::path& dir,
+                      const std::vector<const MetricSpec*>& columns) {
   out << "qm3d demo: bundled stimuli in " << dir.string() << "\n\n";
   std::vector<std::string> titles, rules;
   for (const MetricSpec* m : columns) {
@@ -126,12 +121,24 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
   }
   row(out, "pair (reference vs distorted)", titles);
   row(out, std::string(kPairWidth - 2, '-'), rules);
-  std::vector<MetricResult> reported;
-  std::vector<const MetricSpec*> reported_specs;
+}
+
+// The results of the pair the report shows, with their metrics.
+struct ReportedResults {
+  std::vector<MetricResult> results;
+  std::vector<const MetricSpec*> specs;
+};
+
+// Scores every pair with every column's metric, a table row each; keeps the report pair's
+// results (per-element values included) when a report is written.
+ReportedResults score_table_rows(std::ostream& out, const DemoInputs& inputs,
+                                 const std::vector<const MetricSpec*>& columns,
+                                 const ScoreRequest& request, bool report) {
+  ReportedResults reported;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     const auto& [ref, dist] = inputs[i];
     ScoreRequest r = request;
-    r.keep_per_element = settings && i == kReportPair;
+    r.keep_per_element = report && i == kReportPair;
     std::vector<std::string> cells;
     for (const MetricSpec* m : columns) {
       if (!m->applies(ref, dist)) {
@@ -139,14 +146,18 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
         continue;
       }
       MetricResult result = score(*m, ref, dist, r);
-      cells.push_back(fixed(result.score));
+      cells.push_back(short_number(result.score));
       if (r.keep_per_element) {
-        reported.push_back(std::move(result));
-        reported_specs.push_back(m);
+        reported.results.push_back(std::move(result));
+        reported.specs.push_back(m);
       }
     }
     row(out, kPairs[i].what, cells);
   }
+  return reported;
+}
+
+void print_table_notes(std::ostream& out, const std::vector<const MetricSpec*>& columns) {
   std::string qualities;
   for (const MetricSpec* m : columns) {
     if (m->higher_is_better) qualities += (qualities.empty() ? "" : ", ") + m->title;
@@ -154,16 +165,40 @@ int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
   out << "\nScores are distortions (0 = identical)";
   if (!qualities.empty()) out << ", except " << qualities << " (a quality in dB: higher is better, inf = identical)";
   out << ". PCQM on meshes uses their vertices; PCQM_SAMPLED samples both surfaces alike.\n";
-  if (!settings) return 0;
+}
+
+void write_demo_report(std::ostream& out, const ReportedResults& reported,
+                       const DemoInputs& inputs, const ReportCli& report,
+                       const ReportSettings& settings) {
   std::vector<ReportEntry> entries;
-  for (std::size_t i = 0; i < reported.size(); ++i) {
-    entries.push_back({reported_specs[i], &reported[i]});
+  for (std::size_t i = 0; i < reported.results.size(); ++i) {
+    entries.push_back({reported.specs[i], &reported.results[i]});
   }
   const std::filesystem::path file = demo_report_dir(report.file) / "blob3_bothnoise_report.html";
   write_html_report(file, entries, inputs[kReportPair].first, inputs[kReportPair].second,
-                    *settings);
+                    settings);
   out << "\nReport of '" << kPairs[kReportPair].what << "' (open it in a browser): "
       << file.string() << "\n";
+}
+
+}  // namespace
+
+int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
+             const ReportCli& report, bool quiet, std::ostream& out) {
+  if (!std::filesystem::is_directory(dir / "meshes")) {
+    throw InputError(dir.string() + ": bundled demo data not found (use --dir)");
+  }
+  const std::optional<ReportSettings> settings = demo_report_settings(report, quiet);
+  DemoInputs inputs;
+  for (const auto& p : kPairs) {
+    inputs.emplace_back(default_registry().read(dir / p.reference), default_registry().read(dir / p.distorted));
+  }
+  const std::vector<const MetricSpec*> columns = demo_columns(inputs);
+  print_table_head(out, dir, columns);
+  const ReportedResults reported =
+      score_table_rows(out, inputs, columns, request, settings.has_value());
+  print_table_notes(out, columns);
+  if (settings) write_demo_report(out, reported, inputs, report, *settings);
   return 0;
 }
 

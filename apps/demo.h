@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <ostream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/html_report.h"
 
 namespace qm3d::app {
@@ -17,7 +17,7 @@ std::filesystem::path default_demo_dir();
 /// noise) into `report.file` (a folder; empty = a new folder in the system's temporary
 /// directory) and prints its path. Without three.js the report is skipped with a warning, unless
 /// a folder was given (then InputError). Returns the exit code.
-int run_demo(const std::filesystem::path& dir, const ScoreRequest& request,
+int run_demo(const std::filesystem::path& dir, const scoring::ScoreRequest& request,
              const report::ReportCli& report, bool quiet, std::ostream& out);
 
 }  // namespace qm3d::app

@@ -1,4 +1,5 @@
 #include "eval_commands.h"
+#include "emit_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,17 +12,19 @@
 #include "qm3d/report/eval_plot.h"
 #include "eval_protocol.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/table_text.h"
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/evaluation/evaluation_io.h"
 #include "qm3d/evaluation/orientation.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/evaluation/score_table.h"
 #include "train_command.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
@@ -241,13 +244,6 @@ ordered_json eval_json(const EvalData& d, const EvaluationResult& r, const EvalC
   return j;
 }
 
-std::string fixed(double v, const char* spec = "%.4f") {
-  if (!std::isfinite(v)) return "nan";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
-
 std::string eval_csv(const EvaluationResult& r) {
   std::ostringstream out;
   out << "statistic,value,ci95_low,ci95_high\nstimuli," << r.count << ",,\n";
@@ -357,7 +353,8 @@ int run_eval(const EvalCommandOptions& given, bool quiet) {
 
 // ---- registration --------------------------------------------------------------------------
 
-void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
+// The two tables and their key and score columns.
+void add_eval_input_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_option("SCORES", o.scores, "CSV of objective scores (e.g. the results of qm3d batch)")
       ->required();
   cmd->add_option("MOS", o.mos, "CSV of subjective scores")->required();
@@ -376,6 +373,10 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_flag("--stem", o.stem,
                 "Match keys by file stem (directories and extension removed), e.g. batch paths "
                 "against stimulus names");
+}
+
+// Which way the scores go, and more score files.
+void add_eval_orientation_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_option("--orientation", o.orientation,
                   "Whether a higher score is better: quality, distortion, or auto (from the "
                   "registered metric SCORES' metric column names: psnr is a quality, cmdm a "
@@ -393,6 +394,10 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "metrics are oriented by themselves; other columns are taken as qualities)")
       ->delimiter(',')
       ->allow_extra_args(false);
+}
+
+// How the pairs of Krasula's analysis are labelled.
+void add_krasula_label_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_option("--sd-column", o.sd_column,
                   "Column of MOS with each stimulus' standard deviation of the opinion scores: "
                   "pairs labelled by Krasula's 95% z test (with --n-column, or n from "
@@ -406,6 +411,10 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "CSV of labelled pairs (first, second, label: 1 first better, -1 worse, 0 "
                   "similar) for Krasula's analysis")
       ->type_name("FILE");
+}
+
+// The mapping before P.1401's statistics, the grouping of pairs, the bootstrap.
+void add_eval_statistics_options(CLI::App* cmd, EvalCommandOptions& o) {
   cmd->add_option("--mapping", o.mapping,
                   "Mapping of the scores to the MOS scale before P.1401's statistics (RMSE with "
                   "N - d degrees of freedom, RMSE*, outlier ratio, analytic intervals, tests "
@@ -421,6 +430,10 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
       ->check(CLI::Range(std::size_t(0), kMaxBootstrapReplicates))
       ->capture_default_str();
   cmd->add_option("--seed", o.seed, "Seed of the bootstrap")->capture_default_str();
+}
+
+// What is written, and where.
+void add_eval_output_options(CLI::App* cmd, EvalCommandOptions& o) {
   auto* json = cmd->add_flag("--json", o.json, "Write one JSON object");
   cmd->add_flag("--csv", o.csv, "Write CSV: statistic,value,ci95_low,ci95_high")->excludes(json);
   cmd->add_option("-o,--output", o.output, "Write to FILE instead of stdout")->type_name("FILE");
@@ -428,6 +441,14 @@ void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
                   "Also draw score vs MOS with the fitted mapping (and with Krasula's analysis "
                   "FILE-auc: the AUCs); .svg or .png")
       ->type_name("FILE.svg|png");
+}
+
+void add_eval_options(CLI::App* cmd, EvalCommandOptions& o) {
+  add_eval_input_options(cmd, o);
+  add_eval_orientation_options(cmd, o);
+  add_krasula_label_options(cmd, o);
+  add_eval_statistics_options(cmd, o);
+  add_eval_output_options(cmd, o);
 }
 
 void add_train_options(CLI::App* cmd, TrainCommandOptions& o) {

@@ -1,4 +1,5 @@
 #include "eval_protocol.h"
+#include "emit_text.h"
 
 #include <algorithm>
 #include <cctype>
@@ -12,9 +13,10 @@
 #include <set>
 #include <sstream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/eval_plot.h"
 #include "qm3d/common/error.h"
+#include "qm3d/common/table_text.h"
 #include "qm3d/evaluation/evaluation_protocol.h"
 #include "qm3d/evaluation/orientation.h"
 #include "qm3d/evaluation/pair_labels.h"
@@ -24,6 +26,7 @@
 #include "qm3d/evaluation/score_table.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::report;  // NOLINT: the library this command drives
 using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
@@ -270,17 +273,15 @@ void check_pair_labels(const PairLabels& pairs, const EvalCommandOptions& o) {
 
 // ---- output --------------------------------------------------------------------------------
 
-std::string fixed(const ordered_json& v, const char* spec = "%.4f") {
-  if (!v.is_number()) return "-";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v.get<double>());
-  return buf;
+// A statistic of the protocol's JSON as fixed() writes it; "-" when it has none.
+std::string json_fixed(const ordered_json& v, const char* spec = "%.4f") {
+  return v.is_number() ? fixed(v.get<double>(), spec) : "-";
 }
 
 std::string cell(const ordered_json& statistic) {
-  std::string s = fixed(statistic["value"]);
+  std::string s = json_fixed(statistic["value"]);
   if (statistic["ci95"].is_array()) {
-    s += " [" + fixed(statistic["ci95"][0]) + ", " + fixed(statistic["ci95"][1]) + "]";
+    s += " [" + json_fixed(statistic["ci95"][0]) + ", " + json_fixed(statistic["ci95"][1]) + "]";
   }
   return s;
 }
@@ -343,7 +344,7 @@ std::string protocol_text(const ordered_json& j, const std::vector<std::string>&
         {"auc_ds", "AUC_DS"}, {"auc_bw", "AUC_BW"}, {"c0", "C0"}, {"thr", "THR"}};
     for (const auto& [key, label] : ks) {
       cells = {label};
-      for (const auto& n : names) cells.push_back(fixed(j["metrics"][n]["krasula"][key], "%.6g"));
+      for (const auto& n : names) cells.push_back(json_fixed(j["metrics"][n]["krasula"][key], "%.6g"));
       t.row(cells);
     }
   }
@@ -361,7 +362,7 @@ std::string protocol_text(const ordered_json& j, const std::vector<std::string>&
     c.row({"  a", "b", "test", "statistic", "p"});
     for (const auto& x : j["comparisons"]) {
       c.row({"  " + x["a"].get<std::string>(), x["b"].get<std::string>(),
-             x["test"].get<std::string>(), fixed(x["statistic"], "%.4f"), fixed(x["p"], "%.3g")});
+             x["test"].get<std::string>(), json_fixed(x["statistic"], "%.4f"), json_fixed(x["p"], "%.3g")});
     }
     c.print(out);
   }
@@ -423,8 +424,8 @@ void plot_protocol(const std::string& path, const std::vector<MetricScores>& met
     const ordered_json& statistics = j["metrics"][m.name]["statistics"];
     const MappingFunction& map = r.p1401[i].fit.function;
     ScatterPlot p{m.scores, subjective.mos, map,
-                  m.name + ": PLCC " + fixed(statistics["plcc"]["value"], "%.3f") + ", SROCC " +
-                      fixed(statistics["srocc"]["value"], "%.3f") + ", " +
+                  m.name + ": PLCC " + json_fixed(statistics["plcc"]["value"], "%.3f") + ", SROCC " +
+                      json_fixed(statistics["srocc"]["value"], "%.3f") + ", " +
                       std::string(mapping_name(map.mapping)) + " mapping",
                   m.name, mos_label.empty() ? "MOS" : mos_label};
     write_scatter_plot(sibling(m.name, base.extension().string()), p);
@@ -459,7 +460,7 @@ void warn_orientation(const std::vector<MetricScores>& metrics, const ordered_js
     if (m.orientation_source.rfind("assumed", 0) == 0) {
       if (opposite) {
         std::cerr << "qm3d: warning: " << m.name << " is taken as a quality ("
-                  << m.orientation_source << ") but SROCC is " << fixed(rho)
+                  << m.orientation_source << ") but SROCC is " << json_fixed(rho)
                   << ": a distortion (--lower-is-better " << m.name
                   << ")? Krasula's BW analysis and C0 depend on it\n";
       }
@@ -468,7 +469,7 @@ void warn_orientation(const std::vector<MetricScores>& metrics, const ordered_js
     ++known;
     if (!opposite) continue;
     ++against;
-    if (against <= 3) examples += (against > 1 ? ", " : "") + m.name + " " + fixed(rho);
+    if (against <= 3) examples += (against > 1 ? ", " : "") + m.name + " " + json_fixed(rho);
   }
   if (known > 0 && against == known) {
     std::cerr << "qm3d: warning: every metric of known orientation ranks the stimuli the other way "

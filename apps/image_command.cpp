@@ -1,15 +1,17 @@
 #include "image_command.h"
+#include "emit_text.h"
 
 #include <chrono>
 #include <cstring>
 #include <sstream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/version.h"
 #include "qm3d/render/icid.h"
+#include "qm3d/study/batch_row.h"
 
 namespace qm3d::app {
 namespace {
@@ -89,7 +91,7 @@ int run_image(const ImageCommand& c, int threads, const std::string& data_dir) {
   } else if (c.csv) {
     std::vector<std::string> names;
     for (const auto& [name, value] : r.values) names.push_back(name);
-    text = csv_header(names) + "\n" + csv_row(r, {}, names) + "\n";
+    text = study::csv_header(names) + "\n" + study::csv_row(r, {}, names) + "\n";
   } else {
     text = human_line(s);
   }

@@ -8,13 +8,16 @@
 #include <memory>
 #include <sstream>
 
-#include "batch.h"
-#include "commands.h"
+#include "qm3d/study/batch.h"
+#include "qm3d/study/batch_row.h"
+#include "qm3d/scoring/score.h"
 #include "demo.h"
+#include "emit_text.h"
 #include "eval_commands.h"
 #include "help_format.h"
 #include "qm3d/report/html_report.h"
 #include "image_command.h"
+#include "batch_options.h"
 #include "merge_command.h"
 #include "metric_cli.h"
 #include "progress_display.h"
@@ -26,6 +29,8 @@
 #include "sample_commands.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
+using namespace qm3d::study;  // NOLINT: the study batch runs
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
@@ -309,6 +314,7 @@ int run_batch_command(BatchCommand& c, const GlobalOptions& global, bool worker,
   batch.output = c.results;
   batch.threads = global.threads;
   batch.quiet = global.quiet;
+  batch.progress = stderr_batch_progress();
   batch.request = score_request(c.run, nullptr, global.threads, global.data_dir);
   batch.request.options = metric_option_values(all_metrics(), c.options);
   batch.request.read = read_options(c.colour_scale);

@@ -1,18 +1,14 @@
 #include "merge_command.h"
 
-#include <filesystem>
 #include <iostream>
-#include <set>
 
-#include "batch.h"
-#include "batch_results.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
+#include "qm3d/study/merge.h"
 
 namespace qm3d::app {
+using namespace qm3d::study;  // NOLINT: the merge this command drives
 namespace {
-
-namespace fs = std::filesystem;
 
 // At most this many pairs are named per kind of problem; the rest are counted.
 constexpr std::size_t kMaxListed = 20;
@@ -26,38 +22,9 @@ void print_list(const std::string& prefix, const std::vector<std::string>& items
   }
 }
 
-int run_merge(const MergeCommand& c, bool quiet) {
-  const fs::path list(c.list);
-  if (same_file(list, c.output)) {
-    throw InputError(c.output + ": is the list itself (--list and -o name the same file)");
-  }
-  std::vector<ResultKey> expected;
-  for (const ListPair& pair :
-       parse_pair_list(read_file_bytes(list, kMaxTableBytes), list.string())) {
-    for (const std::string& metric : batch_metrics(pair, list)) {
-      expected.push_back({pair.reference, pair.distorted, metric});
-    }
-  }
-  std::vector<ResultFile> files;
-  std::set<std::string> seen;
-  std::vector<std::string> missing_files;  // with --partial, shards that left no results
-  for (const std::string& input : c.inputs) {
-    if (same_file(input, c.output)) {
-      throw InputError(input + ": is both an input and the output (-o)");
-    }
-    if (!seen.insert(fs::weakly_canonical(input).string()).second) {
-      throw InputError(input + ": given twice");
-    }
-    if (c.partial && !fs::exists(input)) {
-      missing_files.push_back(input + ": no such file (a shard that did not run?)");
-      continue;
-    }
-    files.push_back({input, read_file_bytes(input, kMaxTableBytes)});
-  }
-  print_list("merge: missing shard results: ", missing_files);
-  if (files.empty()) throw InputError("none of the shard results exists; nothing written");
-  const MergeResult m = merge_results(expected, files);
-
+// The problems merge found, on stderr (warnings unless `quiet`); throws when nothing may be
+// written: conflicting rows, or missing rows without --partial.
+void report_problems(const MergeCommand& c, const MergeResult& m, bool quiet) {
   if (!quiet) {
     print_list("qm3d: warning: ", m.warnings);
     print_list("qm3d: warning: duplicated: ", m.duplicates);
@@ -69,27 +36,33 @@ int run_merge(const MergeCommand& c, bool quiet) {
   if (!m.conflicts.empty()) {
     throw FormatError(std::to_string(m.conflicts.size()) +
                       " pairs have conflicting rows in the shard results (listed above); "
-                      "nothing written to " + c.output);
+                      "nothing written to " +
+                      c.output);
   }
   if (!m.missing.empty() && !c.partial) {
     throw InputError(std::to_string(m.missing.size()) + " of " +
                      std::to_string(m.rows.size() + m.missing.size()) +
                      " rows are in no shard result (listed above: did every shard finish? "
-                     "rerun a shard with --resume); nothing written to " + c.output +
-                     " (--partial writes the rows found)");
+                     "rerun a shard with --resume); nothing written to " +
+                     c.output + " (--partial writes the rows found)");
   }
-  // As a batch's final file: the value columns of the metrics the rows name (the rows are in
-  // the list's order already).
-  std::string text = m.header + "\n";
-  for (const std::string& row : m.rows) text += row + "\n";
-  text = tidy_results(text, {});
+}
+
+int run_merge(const MergeCommand& c, bool quiet) {
+  const std::vector<ResultKey> expected = expected_rows(c.list, c.output);
+  const ShardResults inputs = read_shard_results(c.inputs, c.output, c.partial);
+  print_list("merge: missing shard results: ", inputs.missing);
+  if (inputs.files.empty()) throw InputError("none of the shard results exists; nothing written");
+  const MergeResult m = merge_results(expected, inputs.files);
+  report_problems(c, m, quiet);
+  const std::string text = merged_text(m);
   write_file_atomically(c.output, [&](std::ostream& out) { out << text; });
   if (!quiet) {
     std::cerr << "merge: " << m.rows.size() << " rows from " << m.files << " files ("
               << m.rows.size() - m.failed.size() << " ok, " << m.failed.size() << " failed, "
               << m.missing.size() << " missing) written to " << c.output << "\n";
   }
-  return m.failed.empty() && m.missing.empty() && missing_files.empty() ? 0 : 2;
+  return m.failed.empty() && m.missing.empty() && inputs.missing.empty() ? 0 : 2;
 }
 
 }  // namespace
@@ -105,13 +78,15 @@ std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
       "number nor inf is written as an error row); rows scored with other settings are refused; "
       "exit code 2 when a pair is missing, conflicts or failed");
   add_common(c->merge);
-  c->merge->add_option("SHARD_RESULTS", c->inputs, "Results CSVs of the shards (e.g. out/OUT_*.csv)")
+  c->merge
+      ->add_option("SHARD_RESULTS", c->inputs, "Results CSVs of the shards (e.g. out/OUT_*.csv)")
       ->required();
   c->merge->add_option("-o,--output", c->output, "Merged results CSV (written atomically)")
       ->required()
       ->type_name("RESULTS.csv");
-  c->merge->add_option("--list", c->list,
-                       "The list the shards scored: gives the rows expected and their order")
+  c->merge
+      ->add_option("--list", c->list,
+                   "The list the shards scored: gives the rows expected and their order")
       ->required()
       ->type_name("LIST.csv");
   c->merge->add_flag("--partial", c->partial,

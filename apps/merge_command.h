@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 namespace qm3d::app {
 
@@ -34,6 +34,6 @@ std::unique_ptr<MergeCommand> add_merge_command(CLI::App& app,
 std::optional<int> run_merge_command(const MergeCommand& command, bool quiet);
 
 /// Adds `--shard K/N` to `batch_cmd`, parsed (with a usage error for a bad value) into `shard`.
-void add_shard_option(CLI::App* batch_cmd, std::optional<Shard>& shard);
+void add_shard_option(CLI::App* batch_cmd, std::optional<study::Shard>& shard);
 
 }  // namespace qm3d::app

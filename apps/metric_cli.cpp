@@ -7,6 +7,7 @@
 #include "qm3d/evaluation/model_io.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 using namespace qm3d::evaluation;  // NOLINT: the library this command prints
 namespace {
 

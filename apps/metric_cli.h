@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
 namespace qm3d::app {
 
@@ -65,7 +65,7 @@ ReadOptions read_options(const std::string& colour_scale, const std::string& tex
                          const std::string& texture_option);
 
 /// The request of a metric command (`spec` set) or of compare / batch (`spec` null).
-ScoreRequest score_request(const RunCli& r, const MetricSpec* spec, int threads,
+scoring::ScoreRequest score_request(const RunCli& r, const MetricSpec* spec, int threads,
                            const std::string& data_dir);
 
 }  // namespace qm3d::app

@@ -124,4 +124,26 @@ ProgressCallback stderr_progress(const std::string& metric, bool in_place) {
   return [display](const std::string& stage, double fraction) { display->report(stage, fraction); };
 }
 
+study::BatchProgressCallback stderr_batch_progress() {
+  constexpr double kLinePeriodS = 10;  // without a terminal: a line at most this often
+  constexpr int kBarWidth = 30;
+  const bool tty = stderr_is_terminal();
+  auto last_line_s = std::make_shared<double>(0.0);  // elapsed time of the last line
+  return [tty, last_line_s](const study::BatchProgress& p) {
+    const bool end = p.rows_done == p.rows_total;
+    if (tty) {
+      const int filled = static_cast<int>(kBarWidth * p.rows_done / p.rows_total);
+      std::cerr << "\r[" << std::string(filled, '#') << std::string(kBarWidth - filled, '.')
+                << "] " << study::progress_counts(p) << " (" << p.failed << " failed)  ETA "
+                << format_duration(p.eta_s) << "   " << std::flush;
+      if (end) std::cerr << "\n";
+    } else if (end || p.elapsed_s - *last_line_s > kLinePeriodS) {
+      std::cerr << "batch: " << study::progress_counts(p) << " done (" << p.failed
+                << " failed), elapsed " << format_duration(p.elapsed_s) << ", ETA "
+                << format_duration(p.eta_s) << "\n";
+      *last_line_s = p.elapsed_s;
+    }
+  };
+}
+
 }  // namespace qm3d::app

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "qm3d/common/progress.h"
+#include "qm3d/study/batch.h"
 
 namespace qm3d::app {
 
@@ -24,5 +25,10 @@ void clear_progress_line();
 /// when the metric is done or the last copy of the callback is destroyed), erased when the
 /// metric is done; otherwise print a line per stage.
 ProgressCallback stderr_progress(const std::string& metric, bool in_place);
+
+/// A callback that shows a batch's progress on stderr: on a terminal a bar rewritten in place
+/// ("[###...] 12/60 rows, 4/20 pairs (1 failed)  ETA 4m5s"), otherwise a line at most every ten
+/// seconds and at the end ("batch: ... done (1 failed), elapsed 6s, ETA 0s").
+study::BatchProgressCallback stderr_batch_progress();
 
 }  // namespace qm3d::app

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <iostream>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/grid_samples.h"
@@ -12,6 +12,7 @@
 #include "qm3d/mesh/texture.h"
 
 namespace qm3d::app {
+using namespace qm3d::scoring;  // NOLINT: the scoring this command drives
 namespace {
 
 constexpr double kMax8Bit = 255.0;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "qm3d/common/error.h"
+#include "qm3d/common/table_text.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/evaluation/model_io.h"
 #include "qm3d/evaluation/training.h"
@@ -196,13 +197,6 @@ TrainingOptions training_options(const TrainCommandOptions& o) {
 }
 
 // ---- writing -------------------------------------------------------------------------------
-
-std::string fixed(double v, const char* spec = "%.4f") {
-  if (!std::isfinite(v)) return "nan";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, spec, v);
-  return buf;
-}
 
 const SubsetScore& chosen_score(const TrainingResult& r) {
   for (const SubsetScore& s : r.subsets) {

@@ -32,7 +32,7 @@ _TEXT_COLUMNS = {"reference", "distorted", "metric", "status", "error", "warning
 
 
 def _parsed(line):
-    """A row made by the bindings (the rows ``qm3d batch`` writes: result_io's csv_row and
+    """A row made by the bindings (the rows ``qm3d batch`` writes: qm3d::study's csv_row and
     csv_error_row), as a dict of COLUMNS: numbers as floats, empty numbers NaN; an error row's
     empty text cells NaN too."""
     import csv

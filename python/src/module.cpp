@@ -31,6 +31,7 @@
 #include "qm3d/render/ibsm.h"
 #include "qm3d/render/icid.h"
 #include "qm3d/scoring/registry.h"
+#include "qm3d/study/batch_row.h"
 #include "interruptible_call.h"
 
 namespace py = pybind11;
@@ -388,13 +389,13 @@ void bind_results(py::module_& m) {
       .def(
           "csv_row",
           [](const MetricResult& r, const std::vector<std::string>& value_names) {
-            return csv_row(r, {}, value_names);
+            return study::csv_row(r, {}, value_names);
           },
           py::arg("value_names") = std::vector<std::string>{});
 
-  m.def("csv_header", &csv_header, py::arg("value_names") = std::vector<std::string>{});
+  m.def("csv_header", &study::csv_header, py::arg("value_names") = std::vector<std::string>{});
   // The error row of `qm3d batch` (result_io.h): qm3d.dask makes its rows only through these.
-  m.def("csv_error_row", &csv_error_row, py::arg("reference"), py::arg("distorted"),
+  m.def("csv_error_row", &study::csv_error_row, py::arg("reference"), py::arg("distorted"),
         py::arg("metric"), py::arg("error"),
         py::arg("value_names") = std::vector<std::string>{});
   m.def("csv_value_names", [] {

@@ -11,6 +11,7 @@
 
 #include "cli_runner.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/study/batch_row.h"
 #include "test_paths.h"
 
 namespace qm3d {
@@ -130,7 +131,7 @@ TEST_F(FirstHour, BatchResultsHaveTheRunsColumnsInListOrder) {
   EXPECT_EQ(header.back(), "settings");
   // Every value column has a value in some row: no column of a metric that did not run.
   const auto rows = lines_of(results);
-  for (std::size_t c = csv_split(csv_header()).size(); c + 1 < header.size(); ++c) {
+  for (std::size_t c = csv_split(study::csv_header()).size(); c + 1 < header.size(); ++c) {
     bool any = false;
     for (std::size_t r = 1; r < rows.size(); ++r) any = any || !csv_split(rows[r])[c].empty();
     EXPECT_TRUE(any) << "empty column " << header[c];

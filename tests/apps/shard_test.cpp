@@ -1,6 +1,6 @@
 // Tests of apps/shard.h: --shard K/N parsing, the size-balanced partition and the merge of shard
 // results.
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 #include "qm3d/common/error.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
 namespace {
 
 // 20 pair sizes with repeats (ties), zeros (missing files) and a wide range.
@@ -329,4 +329,4 @@ TEST(Merge, RowsScoredWithOtherSettingsAreRefused) {
 }
 
 }  // namespace
-}  // namespace qm3d::app
+}  // namespace qm3d::study

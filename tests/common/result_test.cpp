@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "qm3d/common/result_io.h"
+#include "qm3d/study/batch_row.h"
 
 namespace qm3d {
 namespace {
@@ -60,6 +61,7 @@ TEST(ResultIo, JsonHasEveryDirectionAndTheSingleOneAtTheTop) {
 }
 
 TEST(ResultIo, CsvRowsHaveTheHeadersColumnsAndQuoteFields) {
+  using study::csv_error_row, study::csv_header, study::csv_row;
   const MetricResult r = two_directions();
   const auto header = csv_split(csv_header());
   const auto row = csv_split(csv_row(r));

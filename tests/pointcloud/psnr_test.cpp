@@ -3,6 +3,7 @@
 // the tool and Python pass them) and the library function; plus pc_error's loading rules on
 // small hand-made clouds, thread independence and bad input.
 #include "qm3d/pointcloud/psnr.h"
+#include "qm3d/study/batch_row.h"
 
 #include <gtest/gtest.h>
 
@@ -335,7 +336,7 @@ TEST(Psnr, IdenticalCloudsGiveInfinitePsnrAndZeroHausdorff) {
   EXPECT_FALSE(find_value(r.values, "d2_mse"));  // no normals
   EXPECT_FALSE(r.warnings.empty());
   EXPECT_NE(text_line(r).find("inf"), std::string::npos);
-  EXPECT_NE(csv_row(r, {}, psnr_value_names()).find(",inf,"), std::string::npos);
+  EXPECT_NE(study::csv_row(r, {}, psnr_value_names()).find(",inf,"), std::string::npos);
   EXPECT_TRUE(to_json(r)["features"]["d1_psnr"].is_null());
 }
 

@@ -1,5 +1,6 @@
-// Writing MetricResult: the human line, the JSON object and the CSV row the qm3d tool prints, and
-// the CSV helpers batch and merge use. One writer serves every metric.
+// Writing MetricResult: the human line and the JSON object the qm3d tool prints, and the CSV
+// helpers batch and merge use (the CSV row itself, the batch row: qm3d/study/batch_row.h). One
+// writer serves every metric.
 //
 // JSON (one metric): {metric, version, reference, distorted, options, score, seconds,
 //   directions: {dist_to_ref|ref_to_dist: {score, features: {f1..f8 | F1..F8}, box_size,
@@ -8,7 +9,6 @@
 //   warning.h)}. A metric with named values (psnr) has them as each direction's
 //   `features` and its result's as the top-level `features`, no box size, and its `details`
 //   entries at the top level. NaN and +-inf are written as null; doubles round-trip exactly.
-// CSV: csv_header() columns, one row per result (bbox_max_side columns hold box_size).
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -29,23 +29,6 @@ nlohmann::json to_json(const MetricResult& r);
 /// The JSON object of several metrics on one pair (`qm3d compare --json`): {metric: "compare",
 /// version, reference, distorted, metrics: {name: to_json(result)}}.
 nlohmann::json compare_json(const std::vector<MetricResult>& results);
-
-/// The CSV header shared by every metric and the batch mode: fixed columns (the f1..f8 of each
-/// direction, then `warnings`: warnings_field()), then, for each name of `value_names` (the named
-/// values of the metrics written: MetricSpec::value_names, see metric.h csv_value_names), a column
-/// `NAME` (the result's values) and columns `dist_to_ref_NAME`, `ref_to_dist_NAME`. No value names:
-/// the fixed columns only.
-std::string csv_header(const std::vector<std::string>& value_names = {});
-/// The `warnings` field of a row: empty, or "N: FIRST" (their count and the first message).
-std::string warnings_field(const std::vector<std::string>& warnings);
-/// One CSV row (no newline) under csv_header(value_names). `error` non-empty marks a failed
-/// pair. A value the result lacks is an empty field; an infinite one "inf".
-std::string csv_row(const MetricResult& r, const std::string& error = {},
-                    const std::vector<std::string>& value_names = {});
-/// A CSV row for a pair that failed before producing any result.
-std::string csv_error_row(const std::string& reference, const std::string& distorted,
-                          const std::string& metric, const std::string& error,
-                          const std::vector<std::string>& value_names = {});
 
 /// Quotes a CSV field when needed (RFC 4180; line breaks become spaces).
 std::string csv_field(const std::string& s);

@@ -1,10 +1,9 @@
-#include "batch.h"
+#include "qm3d/study/batch.h"
 
 #include <omp.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -20,73 +19,51 @@
 #include <thread>
 #include <tuple>
 
-#include "batch_results.h"
-#include "commands.h"
+#include "qm3d/study/batch_results.h"
+#include "qm3d/scoring/score.h"
 #include "pair_process.h"
-#include "progress_display.h"
 #include "qm3d/common/error.h"
 #include "qm3d/common/file_io.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/study/batch_row.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
+using namespace qm3d::scoring;  // NOLINT: the scoring the study runs
 using namespace qm3d::report;  // NOLINT: the library this command drives
 namespace {
 
 // A batch's progress: rows (one per pair and metric) and pairs (done when each of its rows is),
-// counted apart when a pair has several rows ("12/60 rows, 4/20 pairs").
+// counted apart when a pair has several rows, told to BatchOptions::progress.
 class Progress {
  public:
-  Progress(const std::vector<std::pair<ListPair, std::string>>& todo, bool quiet)
-      : total_(std::max<std::size_t>(todo.size(), 1)), quiet_(quiet), tty_(stderr_is_terminal()),
-        start_(std::chrono::steady_clock::now()), last_(start_) {
+  Progress(const std::vector<std::pair<ListPair, std::string>>& todo, BatchProgressCallback show)
+      : show_(std::move(show)), start_(std::chrono::steady_clock::now()) {
+    p_.rows_total = std::max<std::size_t>(todo.size(), 1);
     for (const auto& [pair, metric] : todo) ++rows_left_[{pair.reference, pair.distorted}];
-    pairs_total_ = rows_left_.size();
+    p_.pairs_total = rows_left_.size();
   }
 
   void done_one(const std::string& row, bool failed) {
     std::lock_guard<std::mutex> lock(mutex_);
-    ++done_;
-    failed_ += failed ? 1 : 0;
+    ++p_.rows_done;
+    p_.failed += failed ? 1 : 0;
     const auto f = csv_split(row);
     if (f.size() > 1) {
       const auto it = rows_left_.find({f[0], f[1]});
-      if (it != rows_left_.end() && it->second > 0 && --it->second == 0) ++pairs_done_;
+      if (it != rows_left_.end() && it->second > 0 && --it->second == 0) ++p_.pairs_done;
     }
-    if (quiet_) return;
-    print(std::chrono::steady_clock::now());
+    if (!show_) return;
+    p_.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    p_.eta_s = p_.elapsed_s / p_.rows_done * (p_.rows_total - p_.rows_done);
+    show_(p_);
   }
-  std::size_t failed() const { return failed_; }
+  std::size_t failed() const { return p_.failed; }
 
  private:
-  // "7/7 pairs" when every pair has one row, else "12/60 rows, 4/20 pairs".
-  std::string counts() const {
-    const std::string pairs =
-        std::to_string(pairs_done_) + "/" + std::to_string(pairs_total_) + " pairs";
-    if (pairs_total_ == total_) return pairs;
-    return std::to_string(done_) + "/" + std::to_string(total_) + " rows, " + pairs;
-  }
-
-  void print(std::chrono::steady_clock::time_point now) {
-    const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const double eta = elapsed / done_ * (total_ - done_);
-    if (tty_) {
-      const int width = 30;
-      const int filled = static_cast<int>(width * done_ / total_);
-      std::cerr << "\r[" << std::string(filled, '#') << std::string(width - filled, '.') << "] "
-                << counts() << " (" << failed_ << " failed)  ETA " << format_duration(eta)
-                << "   " << std::flush;
-      if (done_ == total_) std::cerr << "\n";
-    } else if (done_ == total_ || now - last_ > std::chrono::seconds(10)) {
-      std::cerr << "batch: " << counts() << " done (" << failed_ << " failed), elapsed "
-                << format_duration(elapsed) << ", ETA " << format_duration(eta) << "\n";
-      last_ = now;
-    }
-  }
-
-  std::size_t total_, done_ = 0, failed_ = 0, pairs_total_ = 0, pairs_done_ = 0;
+  BatchProgress p_;
+  BatchProgressCallback show_;
   std::map<std::pair<std::string, std::string>, std::size_t> rows_left_;
-  bool quiet_, tty_;
-  std::chrono::steady_clock::time_point start_, last_;
+  std::chrono::steady_clock::time_point start_;
   std::mutex mutex_;
 };
 
@@ -434,7 +411,7 @@ ScoringSummary score_jobs(const BatchOptions& o, const std::vector<std::pair<Lis
   // A worker process writes its pair's report itself; here only the folder is made.
   PairReports reports(o, o.isolate ? std::vector<std::pair<ListPair, std::string>>{} : todo);
   const std::vector<PairJob> jobs = group_jobs(todo, !o.report_dir.empty());
-  Progress progress(todo, o.quiet || todo.empty());
+  Progress progress(todo, o.quiet || todo.empty() ? BatchProgressCallback() : o.progress);
   const int concurrent = std::max(1, std::min<int>(o.jobs, static_cast<int>(jobs.size())));
   const int total_threads = o.threads > 0 ? o.threads : omp_get_num_procs();
   // Each job gets its share of the threads, passed to every metric explicitly (a metric's own
@@ -493,6 +470,13 @@ int finish(const BatchOptions& o, const ScoringSummary& run) {
 }
 
 }  // namespace
+
+std::string progress_counts(const BatchProgress& p) {
+  const std::string pairs =
+      std::to_string(p.pairs_done) + "/" + std::to_string(p.pairs_total) + " pairs";
+  if (p.pairs_total == p.rows_total) return pairs;
+  return std::to_string(p.rows_done) + "/" + std::to_string(p.rows_total) + " rows, " + pairs;
+}
 
 std::filesystem::path resolve(const std::filesystem::path& list, const std::string& p) {
   const std::filesystem::path path(p);
@@ -587,34 +571,6 @@ int run_batch(const BatchOptions& options) {
   return finish(o, run);
 }
 
-void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& o) {
-  batch_cmd->add_flag("--retry-failed", o.retry_failed,
-                      "With --resume: score the rows that record an error again (their old rows "
-                      "are replaced)");
-  auto* timeout =
-      batch_cmd
-          ->add_option("--pair-timeout", o.pair_timeout_s,
-                       "Stop scoring a pair after this many seconds; its row records the "
-                       "timeout (default: no limit; over 1e9 s, inf included: no limit)")
-          ->check(CLI::Validator(
-              [](std::string& text) {
-                // CLI::PositiveNumber lets "nan" through (NaN <= 0 is false).
-                double v = 0;
-                const bool number = CLI::detail::lexical_cast(text, v);
-                return number && v > 0 ? std::string()
-                                       : "a number of seconds > 0 needed, not \"" + text + "\"";
-              },
-              "SECONDS > 0"))
-          ->type_name("SECONDS");
-  batch_cmd
-      ->add_flag_function(
-          "--no-isolation", [&o](std::int64_t) { o.isolate = false; },
-          "Score the pairs inside this process instead of in worker processes (one per job, "
-          "restarted after a pair that crashed): saves a few milliseconds per pair, but a pair "
-          "that crashes ends the batch")
-      ->excludes(timeout);
-}
-
 namespace {
 
 // One job of a worker: its rows on stdout as they are scored, then the end line.
@@ -653,4 +609,4 @@ int run_batch_worker(const BatchOptions& options) {
   return 0;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

@@ -1,4 +1,4 @@
-#include "batch_results.h"
+#include "qm3d/study/batch_results.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -16,8 +16,10 @@
 #include "qm3d/common/error.h"
 #include "qm3d/common/metric.h"
 #include "qm3d/common/result_io.h"
+#include "qm3d/study/batch_row.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
+using namespace qm3d::scoring;  // NOLINT: the scoring the study runs
 namespace {
 
 constexpr std::size_t kStatusColumn = 4;
@@ -335,4 +337,4 @@ std::size_t count_error_rows(const std::string& text) {
   return errors;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

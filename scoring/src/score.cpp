@@ -1,21 +1,12 @@
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
-#include <iostream>
+#include <stdexcept>
 
-#include "distortion_map.h"
+#include "qm3d/scoring/distortion_map.h"
 #include "qm3d/common/error.h"
-#include "qm3d/common/file_io.h"
+#include "qm3d/scoring/registry.h"
 
-namespace qm3d::app {
-
-void emit_text(const std::string& text, const std::string& output) {
-  if (output.empty()) {
-    std::cout << text << std::flush;
-    if (!std::cout) throw InputError("stdout: write failed");
-    return;
-  }
-  write_file_atomically(output, [&](std::ostream& out) { out << text; });
-}
+namespace qm3d::scoring {
 
 std::vector<const MetricSpec*> metrics_for(const std::string& name, const Input& reference,
                                            const Input& distorted) {
@@ -98,4 +89,4 @@ void write_map(const std::filesystem::path& map, const MetricSpec& spec, const M
   }
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::scoring

@@ -8,7 +8,7 @@
 
 #include "qm3d/common/types.h"
 
-namespace qm3d::app {
+namespace qm3d::scoring {
 
 /// Writes a binary PLY with the positions, the float properties `distortion`, `quality` (MeshLab's
 /// vertex quality) and `scalar_distortion` (a CloudCompare scalar field), all holding `values`, and
@@ -21,4 +21,4 @@ void write_distortion_map(const std::filesystem::path& path, const std::vector<V
 /// Heat-map colour of t in [0, 1]: blue, cyan, green, yellow, red.
 std::array<std::uint8_t, 3> heat_color(double t);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::scoring

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace qm3d::app {
+namespace qm3d::study {
 
 /// Part `index` (0-based) of `count` parts.
 struct Shard {
@@ -101,4 +101,4 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
 /// "reference, distorted, metric" for messages.
 std::string describe(const ResultKey& key);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

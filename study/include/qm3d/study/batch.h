@@ -1,21 +1,35 @@
 // `qm3d batch`: scores every pair of a list, appending one CSV row per pair as soon as it is done.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 #include "qm3d/report/html_report.h"
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
-namespace CLI {
-class App;
-}
+namespace qm3d::study {
 
-namespace qm3d::app {
+/// How far a batch has got: rows (one per pair and metric) and pairs (done when each of its rows
+/// is), for a caller that shows it (the qm3d tool: apps/progress_display.h).
+struct BatchProgress {
+  std::size_t rows_done = 0, rows_total = 1;  ///< rows_total is at least 1
+  std::size_t pairs_done = 0, pairs_total = 0;
+  std::size_t failed = 0;  ///< rows done that record an error
+  double elapsed_s = 0;    ///< since the batch started scoring
+  double eta_s = 0;        ///< the time left, estimated from the rows done
+};
+
+/// "7/7 pairs" when every pair has one row, else "12/60 rows, 4/20 pairs".
+std::string progress_counts(const BatchProgress& p);
+
+/// Told after each row is done (from any scoring thread, one call at a time).
+using BatchProgressCallback = std::function<void(const BatchProgress&)>;
 
 struct BatchOptions {
   std::filesystem::path list;    ///< CSV with columns reference,distorted[,metric]; metric is
@@ -27,8 +41,9 @@ struct BatchOptions {
   bool resume = false;           ///< skip pairs already in `output` (same settings only)
   bool retry_failed = false;     ///< with resume: score the error rows again (replacing them)
   bool overwrite = false;        ///< replace an existing `output`
-  bool quiet = false;            ///< no progress on stderr
-  ScoreRequest request;          ///< run options (threads set per job) and metric options
+  bool quiet = false;            ///< no progress (`progress` not called), no summary on stderr
+  BatchProgressCallback progress;  ///< told after each row; empty = not shown
+  scoring::ScoreRequest request;          ///< run options (threads set per job) and metric options
   std::optional<Shard> shard;    ///< score only this part of the pairs (--shard K/N)
   /// One HTML report per pair (report_file_name()) and an index of the results, sorted by score
   /// (index.html; index-K-of-N.html for a shard); empty = none. A pair's report holds the
@@ -70,9 +85,6 @@ std::vector<std::string> batch_metrics(const ListPair& pair, const std::filesyst
 /// with other settings.
 int run_batch(const BatchOptions& options);
 
-/// Adds --retry-failed, --pair-timeout and --no-isolation to `batch_cmd`, parsed into `options`.
-void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& options);
-
 /// The worker of an isolated batch (`qm3d --batch-worker batch ...`, started by run_batch):
 /// reads jobs from stdin, one line each ("THREADS,REFERENCE,DISTORTED,METRIC..." as CSV
 /// fields), and for each writes its rows on stdout as soon as each is scored, writes the pair's
@@ -80,4 +92,4 @@ void add_batch_safety_options(CLI::App* batch_cmd, BatchOptions& options);
 /// when the report could not be written. Returns 0 at the end of stdin.
 int run_batch_worker(const BatchOptions& options);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

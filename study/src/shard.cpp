@@ -1,4 +1,4 @@
-#include "shard.h"
+#include "qm3d/study/shard.h"
 
 #include <cctype>
 #include <charconv>
@@ -16,7 +16,7 @@
 #include "qm3d/common/result_io.h"
 #include "qm3d/common/table_text.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
 namespace {
 
 // A decimal number (digits only: no sign, spaces or exponent); false when `s` is not one.
@@ -237,77 +237,140 @@ std::string describe(const ResultKey& key) {
   return key.reference + ", " + key.distorted + ", " + key.metric;
 }
 
+namespace {
+
+// The columns merge reads, found in the first file's header; every other file's header must
+// be the same.
+struct ResultColumns {
+  std::vector<std::string> header_fields;
+  std::string header_file;
+  std::size_t seconds = 0, status = 0, error = 0, score = 0, settings = kNoColumn;
+};
+
+using RowsByKey = std::map<ResultKey, std::vector<Row>>;
+
+// The header line of `file`: the first file's sets the columns, another's must equal it.
+void read_header(const std::vector<std::string>& fields, const std::string& line,
+                 const ResultFile& file, ResultColumns& columns, MergeResult& result) {
+  if (!columns.header_fields.empty()) {
+    if (fields != columns.header_fields) {
+      throw FormatError(file.name + ": header differs from " + columns.header_file +
+                        "'s (results of another qm3d version?)");
+    }
+    return;
+  }
+  if (fields.size() < 3 || fields[0] != "reference" || fields[1] != "distorted" ||
+      fields[2] != "metric") {
+    throw FormatError(file.name +
+                      ": no reference,distorted,metric header (not a qm3d batch results "
+                      "file?)");
+  }
+  columns.seconds = column_of(fields, "seconds", file.name);
+  columns.status = column_of(fields, "status", file.name);
+  columns.error = column_of(fields, "error", file.name);
+  columns.score = column_of(fields, "score", file.name);
+  const auto settings = std::find(fields.begin(), fields.end(), "settings");
+  if (settings != fields.end()) columns.settings = settings - fields.begin();
+  columns.header_fields = fields;
+  columns.header_file = file.name;
+  result.header = line;
+}
+
+// The rows of `file` by key into `rows`; `first_settings`: the first row read, whose settings
+// every row must share.
+void read_rows(const ResultFile& file, ResultColumns& columns, RowsByKey& rows,
+               std::optional<Row>& first_settings, MergeResult& result) {
+  std::istringstream in(file.text);
+  std::string line;
+  bool have_header = false;
+  for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (in.eof()) {  // no newline after this line: cut short by a kill
+      result.warnings.push_back(file.name + ":" + std::to_string(line_no) +
+                                ": incomplete last line ignored (a killed batch? --resume "
+                                "completes it)");
+      break;
+    }
+    if (line.empty()) continue;
+    auto fields = csv_split(line);
+    if (!have_header) {
+      have_header = true;
+      read_header(fields, line, file, columns, result);
+      continue;
+    }
+    if (fields.size() != columns.header_fields.size()) {
+      throw FormatError(file.name + ": line " + std::to_string(line_no) + ": " +
+                        std::to_string(fields.size()) + " columns, the header has " +
+                        std::to_string(columns.header_fields.size()));
+    }
+    ++result.rows_read;
+    ResultKey key{fields[0], fields[1], fields[2]};
+    Row row{line, std::move(fields), file.name, line_no};
+    if (columns.settings != kNoColumn) check_same_settings(row, first_settings, columns.settings);
+    rows[key].push_back(std::move(row));
+  }
+  if (!have_header) throw FormatError(file.name + ": empty (no header line)");
+}
+
+// Rows of one key are the same when every column but `seconds` is equal.
+bool same_result(const Row& a, const Row& b, const ResultColumns& columns) {
+  for (std::size_t c = 0; c < a.fields.size(); ++c) {
+    if (c != columns.seconds && a.fields[c] != b.fields[c]) return false;
+  }
+  return true;
+}
+
+// The row kept of a key's rows: the first, an ok row without a score made the error it is.
+Row kept_row(const std::vector<Row>& found, const ResultColumns& columns) {
+  Row kept = found[0];
+  std::vector<std::string>& f = kept.fields;
+  if (f[columns.status] == "ok" && !is_batch_score(f[columns.score])) {
+    f[columns.status] = "error";
+    f[columns.error] = "merge: status ok but the score \"" + f[columns.score] +
+                       "\" is not a score (a finite number or inf) (" + where(kept) + ")";
+    f[columns.score].clear();
+    kept.line = csv_line(f);
+  }
+  return kept;
+}
+
+// Adds the rows found for `key` (listed `times` times) to `result`: a conflict, or the kept row
+// (with a duplicate or failure noted).
+void join_key(const ResultKey& key, const std::vector<Row>& found, std::size_t times,
+              const ResultColumns& columns, MergeResult& result) {
+  for (std::size_t i = 1; i < found.size(); ++i) {
+    if (!same_result(found[0], found[i], columns)) {
+      result.conflicts.push_back(describe(key) + ": " + where(found[0]) + " and " +
+                                 where(found[i]) + " differ");
+      return;
+    }
+  }
+  if (found.size() > times) {
+    std::string places;
+    for (const Row& r : found) places += (places.empty() ? "" : ", ") + where(r);
+    result.duplicates.push_back(describe(key) + ": " + std::to_string(found.size()) +
+                                " identical rows (" + places + "), one kept");
+  }
+  const Row kept = kept_row(found, columns);
+  result.rows.push_back(kept.line);
+  if (kept.fields[columns.status] != "ok") {
+    result.failed.push_back(describe(key) + ": " + kept.fields[columns.error]);
+  }
+}
+
+}  // namespace
+
 MergeResult merge_results(const std::vector<ResultKey>& expected,
                           const std::vector<ResultFile>& files) {
   MergeResult result;
   result.files = files.size();
   std::map<ResultKey, std::size_t> times_expected;
   for (const ResultKey& k : expected) ++times_expected[k];
+  RowsByKey rows;
+  ResultColumns columns;
+  std::optional<Row> first_settings;
+  for (const ResultFile& file : files) read_rows(file, columns, rows, first_settings, result);
 
-  std::map<ResultKey, std::vector<Row>> rows;
-  std::vector<std::string> header_fields;
-  std::string header_file;
-  std::size_t seconds_column = 0, status_column = 0, error_column = 0, score_column = 0;
-  std::size_t settings_column = kNoColumn;
-  std::optional<Row> first_settings;  // the first row, whose settings every row must share
-  for (const ResultFile& file : files) {
-    std::istringstream in(file.text);
-    std::string line;
-    bool have_header = false;
-    for (std::size_t line_no = 1; std::getline(in, line); ++line_no) {
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (in.eof()) {  // no newline after this line: cut short by a kill
-        result.warnings.push_back(file.name + ":" + std::to_string(line_no) +
-                                  ": incomplete last line ignored (a killed batch? --resume "
-                                  "completes it)");
-        break;
-      }
-      if (line.empty()) continue;
-      auto fields = csv_split(line);
-      if (!have_header) {
-        have_header = true;
-        if (header_fields.empty()) {
-          if (fields.size() < 3 || fields[0] != "reference" || fields[1] != "distorted" ||
-              fields[2] != "metric") {
-            throw FormatError(file.name +
-                              ": no reference,distorted,metric header (not a qm3d batch results "
-                              "file?)");
-          }
-          seconds_column = column_of(fields, "seconds", file.name);
-          status_column = column_of(fields, "status", file.name);
-          error_column = column_of(fields, "error", file.name);
-          score_column = column_of(fields, "score", file.name);
-          const auto settings = std::find(fields.begin(), fields.end(), "settings");
-          if (settings != fields.end()) settings_column = settings - fields.begin();
-          header_fields = fields;
-          header_file = file.name;
-          result.header = line;
-        } else if (fields != header_fields) {
-          throw FormatError(file.name + ": header differs from " + header_file +
-                            "'s (results of another qm3d version?)");
-        }
-        continue;
-      }
-      if (fields.size() != header_fields.size()) {
-        throw FormatError(file.name + ": line " + std::to_string(line_no) + ": " +
-                          std::to_string(fields.size()) + " columns, the header has " +
-                          std::to_string(header_fields.size()));
-      }
-      ++result.rows_read;
-      ResultKey key{fields[0], fields[1], fields[2]};
-      Row row{line, std::move(fields), file.name, line_no};
-      if (settings_column != kNoColumn) check_same_settings(row, first_settings, settings_column);
-      rows[key].push_back(std::move(row));
-    }
-    if (!have_header) throw FormatError(file.name + ": empty (no header line)");
-  }
-
-  const auto same_result = [&](const Row& a, const Row& b) {
-    for (std::size_t c = 0; c < a.fields.size(); ++c) {
-      if (c != seconds_column && a.fields[c] != b.fields[c]) return false;
-    }
-    return true;
-  };
   std::set<ResultKey> emitted;
   for (const ResultKey& key : expected) {
     if (!emitted.insert(key).second) continue;  // listed again: batch writes it once
@@ -316,37 +379,7 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
       result.missing.push_back(describe(key));
       continue;
     }
-    const std::vector<Row>& found = it->second;
-    bool conflict = false;
-    for (std::size_t i = 1; i < found.size(); ++i) {
-      if (!same_result(found[0], found[i])) {
-        result.conflicts.push_back(describe(key) + ": " + where(found[0]) + " and " +
-                                   where(found[i]) + " differ");
-        conflict = true;
-        break;
-      }
-    }
-    if (conflict) continue;
-    if (found.size() > times_expected[key]) {
-      std::string places;
-      for (const Row& r : found) places += (places.empty() ? "" : ", ") + where(r);
-      result.duplicates.push_back(describe(key) + ": " + std::to_string(found.size()) +
-                                  " identical rows (" + places + "), one kept");
-    }
-    Row kept = found[0];
-    if (kept.fields[status_column] == "ok" && !is_batch_score(kept.fields[score_column])) {
-      // A row that says ok without a score is not a result: kept as the error it is.
-      kept.fields[status_column] = "error";
-      kept.fields[error_column] = "merge: status ok but the score \"" + kept.fields[score_column] +
-                                  "\" is not a score (a finite number or inf) (" + where(kept) +
-                                  ")";
-      kept.fields[score_column].clear();
-      kept.line = csv_line(kept.fields);
-    }
-    result.rows.push_back(kept.line);
-    if (kept.fields[status_column] != "ok") {
-      result.failed.push_back(describe(key) + ": " + kept.fields[error_column]);
-    }
+    join_key(key, it->second, times_expected[key], columns, result);
   }
   for (const auto& [key, found] : rows) {
     if (times_expected.count(key) == 0) {
@@ -356,4 +389,4 @@ MergeResult merge_results(const std::vector<ResultKey>& expected,
   return result;
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

@@ -1,5 +1,6 @@
-// The metric commands of the qm3d tool, driven by the metric registry: which metrics run on a
-// pair, with which options, and the distortion map.
+// Scoring a pair by metric name, driven by default_registry(): which metrics run on a pair
+// (metrics_for), with which options (ScoreRequest), and the distortion map (write_map). The tool,
+// the study runner (qm3d::study) and Python score through these.
 #pragma once
 
 #include <filesystem>
@@ -11,14 +12,7 @@
 #include "qm3d/common/result.h"
 #include "qm3d/scoring/registry.h"
 
-namespace qm3d::app {
-
-/// The tool's metrics: qm3d::scoring's one registry (mesh, point cloud, render).
-using scoring::default_registry;
-
-/// Writes a command's output: to stdout (a failed write, e.g. a closed pipe, is an InputError) or,
-/// atomically, to `output` when it is not empty.
-void emit_text(const std::string& text, const std::string& output);
+namespace qm3d::scoring {
 
 /// What a scoring command asks for, for every metric it runs.
 struct ScoreRequest {
@@ -60,4 +54,4 @@ MetricResult score(const MetricSpec& spec, const Input& reference, const Input& 
 void write_map(const std::filesystem::path& map, const MetricSpec& spec, const MetricResult& result,
                const Input& reference, const Input& distorted);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::scoring

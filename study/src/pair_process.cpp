@@ -16,7 +16,7 @@
 
 extern char** environ;
 
-namespace qm3d::app {
+namespace qm3d::study {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -179,4 +179,4 @@ std::string describe_worker_end(const JobOutcome& w, double timeout_s) {
   return "worker process ended without a result";
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace qm3d::app {
+namespace qm3d::study {
 
 /// The line a worker writes after the output of each job: "<kJobEnd>" or "<kJobEnd> STATUS".
 inline constexpr const char* kJobEnd = "#qm3d-job-end";
@@ -62,4 +62,4 @@ class WorkerProcess {
 /// after 5 s (--pair-timeout) and was killed", ...
 std::string describe_worker_end(const JobOutcome& outcome, double timeout_s);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

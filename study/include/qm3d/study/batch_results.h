@@ -10,9 +10,9 @@
 #include <tuple>
 #include <vector>
 
-#include "commands.h"
+#include "qm3d/scoring/score.h"
 
-namespace qm3d::app {
+namespace qm3d::study {
 
 /// csv_header() and ",settings".
 std::string batch_header(const std::vector<std::string>& value_names = {});
@@ -20,7 +20,7 @@ std::string batch_header(const std::vector<std::string>& value_names = {});
 /// The options a batch scores with, as one field: "key=value" items separated by spaces and
 /// sorted (metric options as given, direction, model=METRIC:w1/.../w8), or "defaults". The
 /// data folder and thread counts are not settings (they do not change a score).
-std::string batch_settings(const ScoreRequest& request);
+std::string batch_settings(const scoring::ScoreRequest& request);
 
 /// "radius: 0.01 in FILE, 0.02 in this run; ..." for the items of two settings that differ.
 std::string settings_difference(const std::string& recorded, const std::string& current,
@@ -86,4 +86,4 @@ std::string tidy_results(const std::string& text, const std::vector<RowKey>& ord
 /// The number of rows of a results text whose status is not "ok".
 std::size_t count_error_rows(const std::string& text);
 
-}  // namespace qm3d::app
+}  // namespace qm3d::study

@@ -1,11 +1,11 @@
-#include "distortion_map.h"
+#include "qm3d/scoring/distortion_map.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "qm3d/common/ply.h"
 
-namespace qm3d::app {
+namespace qm3d::scoring {
 
 std::array<std::uint8_t, 3> heat_color(double t) {
   static constexpr double kStops[5][3] = {
@@ -44,4 +44,4 @@ void write_distortion_map(const std::filesystem::path& path, const std::vector<V
   ply::write(path, d);
 }
 
-}  // namespace qm3d::app
+}  // namespace qm3d::scoring
