@@ -106,24 +106,25 @@ def test_every_pair_once_when_a_worker_dies(client, tmp_path):
 
 
 def test_a_pair_that_gets_its_worker_killed_is_its_error_row(tmp_path):
-    # One 500 MB worker; the last pair's two 6000^2 ibsm views (~290 MB each, plus their luma
-    # images) take it past the nanny's terminate threshold (95 %), which kills it. No retry
-    # (allowed-failures 0) keeps the test short: Dask gives up on the task at once
-    # (KilledWorker), which must be that pair's error row, the other rows kept. (It comes last:
-    # tasks queued on a worker that dies count that death too, and with no retry would fail.)
+    # One 500 MB worker; the last pair, mesh PSNR on mmetric's grid at size 2048 (about 1.9 GB:
+    # millions of grid samples per mesh, past 500 MB within two seconds), takes it past the
+    # nanny's terminate threshold (95 %), which kills it. No retry (allowed-failures 0) keeps
+    # the test short: Dask gives up on the task at once (KilledWorker), which must be that
+    # pair's error row, the other rows kept. (It comes last: tasks queued on a worker that dies
+    # count that death too, and with no retry would fail.)
     import dask
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
                                            memory_limit="500MB", dashboard_address=None)
         c = distributed.Client(cluster)
     try:
-        pairs = [(*CLOUD_PAIRS[0], "pcqm"), (*CLOUD_PAIRS[1], "pcqm"), (*MESH_PAIRS[0], "ibsm")]
-        table = qm3d.dask.score_pairs(pairs, client=c, resolution=6000, views=2, radius=0.02)
+        pairs = [(*CLOUD_PAIRS[0], "pcqm"), (*CLOUD_PAIRS[1], "pcqm"), (*MESH_PAIRS[0], "psnr")]
+        table = qm3d.dask.score_pairs(pairs, client=c, grid_size=2048, radius=0.02)
     finally:
         c.close()
         cluster.close()
     assert list(table["status"]) == ["ok", "ok", "error"], table["error"].tolist()
-    assert list(table["metric"]) == ["pcqm", "pcqm", "ibsm"]
+    assert list(table["metric"]) == ["pcqm", "pcqm", "psnr"]
     assert "died" in table["error"][2] and "KilledWorker" in table["error"][2]
     assert pd.isna(table["score"][2])
     assert table["score"][0] == qm3d.pcqm(*CLOUD_PAIRS[0], radius=0.02).score
