@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 
+#include "qm3d/common/cpu.h"
 #include "qm3d/common/statistics.h"
 
 #if defined(QM3D_HAVE_LIBMVEC_AVX2)
@@ -30,7 +31,7 @@ __attribute__((target("avx2"))) inline __m256d four_weights(__m256d d, __m256d s
 
 __attribute__((target("avx2"))) void weights_avx2(double* values, std::size_t n, double sigma) {
   const __m256d s = _mm256_set1_pd(sigma);
-  const __m256d scale = _mm256_set1_pd(1.0 / sigma / std::sqrt(2 * 3.141592));
+  const __m256d scale = _mm256_set1_pd(gaussian_weight_scale(sigma));
   std::size_t i = 0;
   for (; i + 4 <= n; i += 4) {
     _mm256_storeu_pd(values + i, four_weights(_mm256_loadu_pd(values + i), s, scale));
@@ -43,18 +44,13 @@ __attribute__((target("avx2"))) void weights_avx2(double* values, std::size_t n,
   _mm256_storeu_pd(tail, four_weights(_mm256_loadu_pd(tail), s, scale));
   for (std::size_t k = i; k < n; ++k) values[k] = tail[k - i];
 }
-
-bool has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
 #endif
 
 }  // namespace
 
 void gaussian_weights_in_place(double* values, std::size_t n, double sigma) {
 #if defined(QM3D_HAVE_LIBMVEC_AVX2)
-  if (has_avx2()) {
+  if (cpu_has_avx2()) {
     weights_avx2(values, n, sigma);
     return;
   }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "qm3d/common/cpu.h"
 #include "ssim_stream.h"
 
 namespace qm3d::render {
@@ -231,10 +232,6 @@ __attribute__((target("avx2"))) void vertical_span_avx2(const double* const ra[]
 __attribute__((target("avx2"))) void horizontal_span_avx2(const double* v, int count, double* h) {
   horizontal_span<Lanes4>(v, count, h);
 }
-bool has_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2");
-  return yes;
-}
 #else
 void vertical_span_avx2(const double* const ra[], const double* const rb[], int lo, int hi,
                         double* const v[5]) {
@@ -243,7 +240,6 @@ void vertical_span_avx2(const double* const ra[], const double* const rb[], int 
 void horizontal_span_avx2(const double* v, int count, double* h) {
   horizontal_span<Lanes>(v, count, h);
 }
-bool has_avx2() { return false; }
 #endif
 
 }  // namespace
@@ -288,7 +284,7 @@ struct SsimStream::Scale {
     }
     double* v[5];
     for (int q = 0; q < 5; ++q) v[q] = vertical[q].data() + kRadius;
-    if (has_avx2()) {
+    if (cpu_has_avx2()) {
       vertical_span_avx2(ra, rb, lo, hi, v);
     } else {
       vertical_span<Lanes>(ra, rb, lo, hi, v);
@@ -309,7 +305,7 @@ struct SsimStream::Scale {
     for (int q = 0; q < 5; ++q) {
       double* h = horizontal[q].data();
       const double* v = vertical[q].data() + first;  // padded: column first - kRadius
-      if (has_avx2()) {
+      if (cpu_has_avx2()) {
         horizontal_span_avx2(v, n, h);
       } else {
         horizontal_span<Lanes>(v, n, h);

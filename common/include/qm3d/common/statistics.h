@@ -8,13 +8,18 @@
 
 namespace qm3d {
 
-/// Gaussian weight G(d) = exp(-d^2 / (2 sigma^2)) / (sigma sqrt(2 * 3.141592)).
-/// The truncated pi is the references' (MEPP2 cmdm.h, PCQM main.cpp); the constant cancels
-/// because every statistic is normalised by the sum of weights. Inline: it runs once per sample.
-inline double gaussian_weight(double distance, double sigma) {
+/// The constant factor of gaussian_weight, 1 / (sigma sqrt(2 * 3.141592)) (also used by
+/// gaussian_weights_in_place). The truncated pi is the references' (MEPP2 cmdm.h, PCQM
+/// main.cpp); the constant cancels because every statistic is normalised by the sum of weights.
+inline double gaussian_weight_scale(double sigma) {
   // Written as in MEPP2 cmdm.h and PCQM main.cpp so that the weights round the same way.
-  return 1.0 / sigma / std::sqrt(2 * 3.141592) *
-         std::exp(-(distance * distance) / 2.0 / sigma / sigma);
+  return 1.0 / sigma / std::sqrt(2 * 3.141592);
+}
+
+/// Gaussian weight G(d) = exp(-d^2 / (2 sigma^2)) / (sigma sqrt(2 * 3.141592)).
+/// Inline: it runs once per sample.
+inline double gaussian_weight(double distance, double sigma) {
+  return gaussian_weight_scale(sigma) * std::exp(-(distance * distance) / 2.0 / sigma / sigma);
 }
 
 /// gaussian_weight(values[i], sigma) for each i, in place: values are distances on entry,
