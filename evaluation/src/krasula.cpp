@@ -3,15 +3,18 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <parallel/algorithm>
 #include <stdexcept>
 
+#include "qm3d/common/large_arrays.h"
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/evaluation/p1401.h"  // two_sided_normal_p
 
@@ -71,12 +74,82 @@ double delong_z(const std::vector<double>& aucs, const std::vector<double>& cov,
 
 // ---- one metric's sorted values and the structural components counted in them -------------
 
+// Bucket keys for values in [0, range]: floor(x * buckets / range), clamped to the last
+// bucket. The key never decreases as x grows (a product by a constant >= 0 and a truncation,
+// both monotone), so every value in a lower bucket is below x and every one in a higher bucket
+// above it: a count at x needs only x's own bucket.
+class BucketKey {
+ public:
+  BucketKey() = default;
+  // A subnormal range would make the scale infinite (and 0 * inf NaN): it stays finite.
+  BucketKey(double range, std::size_t buckets)
+      : scale_(range > 0 ? std::min(static_cast<double>(buckets) / range,
+                                    std::numeric_limits<double>::max())
+                         : 0),
+        last_(buckets - 1) {}
+  std::size_t operator()(double x) const {
+    const double key = x * scale_;
+    return key < static_cast<double>(last_) ? static_cast<std::size_t>(key) : last_;
+  }
+
+ private:
+  double scale_ = 0;
+  std::size_t last_ = 0;
+};
+
+// A sorted array of values >= 0 with a bucket index (about 16 values a bucket), so that a count
+// at any x reads one index entry and x's bucket: a few cache lines, where a binary search of a
+// 25 M array reads ~25.
+struct IndexedValues {
+  std::vector<double> v;  // ascending
+  BucketKey key;
+  std::vector<std::uint32_t> start;  // bucket b: [start[b], start[b + 1]); below kMaxPairs
+  std::size_t size() const { return v.size(); }
+  // Builds the index of the sorted values (one pass).
+  void index(double range) {
+    const std::size_t buckets = std::max<std::size_t>(1, v.size() / 16);
+    key = BucketKey(range, buckets);
+    reserve_with_huge_pages(start, buckets + 1);
+    start.assign(buckets + 1, static_cast<std::uint32_t>(v.size()));
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      for (const std::size_t b = key(v[i]); next <= b; ++next)
+        start[next] = static_cast<std::uint32_t>(i);
+    }
+  }
+  // {#{values < x}, #{values == x}}, at any x.
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
+    const std::size_t b = key(x);
+    const std::size_t lo = start[b], hi = start[b + 1];
+    if (lo == hi || x < v[lo]) return {lo, 0};
+    if (x > v[hi - 1]) return {hi, 0};
+    if (v[lo] == v[hi - 1]) return {lo, hi - lo};  // one distinct value, and x is it
+    const auto first = v.begin() + static_cast<std::ptrdiff_t>(lo);
+    const auto last = v.begin() + static_cast<std::ptrdiff_t>(hi);
+    const auto l = std::lower_bound(first, last, x);
+    const auto u = std::upper_bound(l, last, x);
+    return {static_cast<std::uint64_t>(l - v.begin()), static_cast<std::uint64_t>(u - l)};
+  }
+};
+
+// Counting at arbitrary x through the index (the pass over the pairs).
+class Probe {
+ public:
+  explicit Probe(const IndexedValues& values) : v_(values) {}
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
+    return v_.below_and_equal(x);
+  }
+
+ private:
+  const IndexedValues& v_;
+};
+
 // Counting in a sorted array at ascending query values: each search starts where the last one
-// ended and gallops forward (exponential, then binary search), so that a block of queries,
-// sorted, sweeps the array once, reading it nearly in order instead of ~25 cache lines a query.
+// ended and gallops forward (exponential, then binary search), so that queries in ascending
+// order (the sums over one metric's own sorted values) sweep the array once.
 class Sweep {
  public:
-  explicit Sweep(const std::vector<double>& sorted) : v_(sorted) {}
+  explicit Sweep(const IndexedValues& sorted) : v_(sorted.v) {}
   // {#{values < x}, #{values == x}}; x at least the previous query's.
   std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) {
     at_ = gallop(at_, [x](double v) { return v < x; });
@@ -104,14 +177,45 @@ class Sweep {
   std::size_t at_ = 0;
 };
 
+// Probe's interface, but only touching what a count at x will read, so that the cross pass can
+// run a chunk of pairs three times: touching the index entries, then the buckets' values (both
+// fetched together, not one miss after the other), then counting in the cache.
+class TouchIndex {
+ public:
+  explicit TouchIndex(const IndexedValues& values) : v_(values) {}
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
+    __builtin_prefetch(v_.start.data() + v_.key(x));
+    return {0, 0};
+  }
+
+ private:
+  const IndexedValues& v_;
+};
+
+class TouchValues {
+ public:
+  explicit TouchValues(const IndexedValues& values) : v_(values) {}
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
+    const std::size_t b = v_.key(x), lo = v_.start[b], hi = v_.start[b + 1];
+    if (lo < hi) {
+      __builtin_prefetch(v_.v.data() + lo);
+      __builtin_prefetch(v_.v.data() + hi - 1);
+    }
+    return {0, 0};
+  }
+
+ private:
+  const IndexedValues& v_;
+};
+
 // One metric's values, sorted: |d| of the similar pairs (S), and B (d of the pairs labelled 1,
 // -d of those labelled -1) split by sign, so that the different pairs' |d| (D = |B|) and B
 // itself are both counted in the same two arrays.
 struct SortedValues {
-  std::vector<double> similar;   // S, ascending
-  std::vector<double> positive;  // B > 0, ascending
-  std::vector<double> negative;  // -B for B < 0, ascending
-  std::uint64_t zeros = 0;       // B == 0
+  IndexedValues similar;    // S, ascending
+  IndexedValues positive;   // B > 0, ascending
+  IndexedValues negative;   // -B for B < 0, ascending
+  std::uint64_t zeros = 0;  // B == 0
 };
 
 // The structural-component counts of one metric's pairs, at their |d| in ascending order (a
@@ -119,9 +223,10 @@ struct SortedValues {
 // DS, a different pair's |d| = x against S: 2 #{S < x} + #{S == x};
 // DS, a similar pair's |d| = y against D = |B|: 2 #{D < y} + #{D == y};
 // BW, a B value b against W = -B: 2 #{W < b} + #{W == b} = 2 #{B > -b} + #{B == -b}.
-class Counter {
+template <class Search>
+class Counts {
  public:
-  explicit Counter(const SortedValues& s)
+  explicit Counts(const SortedValues& s)
       : s_(s), similar_(s.similar), positive_(s.positive), negative_(s.negative) {}
   std::uint64_t ds_different(double x) {
     const auto [less, equal] = similar_.below_and_equal(x);
@@ -147,15 +252,16 @@ class Counter {
 
  private:
   const SortedValues& s_;
-  Sweep similar_, positive_, negative_;
+  Search similar_, positive_, negative_;
 };
+using Counter = Counts<Sweep>;  // queries in ascending order
+using Lookup = Counts<Probe>;   // queries in any order
 
 // Pairs in blocks: fn(begin, count, d) with d[m * count + i] metric m's difference of pair
 // begin + i, for consecutive blocks in pair order.
 using BlockFn = std::function<void(std::size_t begin, std::size_t count, const double* d)>;
 using PairBlocks = std::function<void(const BlockFn&)>;
-// Large enough that a block's sorted queries are dense in the sorted arrays (a sweep reads them
-// nearly in order), small enough to stay a few MB.
+// Pairs generated at a time: a few MB of differences.
 constexpr std::size_t kBlock = std::size_t(1) << 18;
 
 // The structural components of Sun & Xu's fastDeLong (IEEE SPL 2014) of one list of ratings
@@ -236,16 +342,16 @@ MetricSums sweep_sorted(const SortedValues& s, bool ds) {
   };
   if (ds) {
     Counter different(s), similar(s);
-    for (Distinct d(s.positive, &s.negative, s.zeros); d.next(x, w);) {
+    for (Distinct d(s.positive.v, &s.negative.v, s.zeros); d.next(x, w);) {
       add(different.ds_different(x), r.ds_different, r.ds_different_sq);
     }
-    for (Distinct d(s.similar, nullptr, 0); d.next(x, w);) {
+    for (Distinct d(s.similar.v, nullptr, 0); d.next(x, w);) {
       add(similar.ds_similar(x), r.ds_similar, r.ds_similar_sq);
     }
   }
   Counter above(s), below(s);  // B > 0 (queries the negative array), B < 0 (the positive one)
-  for (Distinct d(s.positive, nullptr, 0); d.next(x, w);) add(above.bw(x), r.bw, r.bw_sq);
-  for (Distinct d(s.negative, nullptr, 0); d.next(x, w);) add(below.bw(-x), r.bw, r.bw_sq);
+  for (Distinct d(s.positive.v, nullptr, 0); d.next(x, w);) add(above.bw(x), r.bw, r.bw_sq);
+  for (Distinct d(s.negative.v, nullptr, 0); d.next(x, w);) add(below.bw(-x), r.bw, r.bw_sq);
   w = s.zeros;
   add(below.bw(0), r.bw, r.bw_sq);
   return r;
@@ -261,66 +367,57 @@ struct Analysis {
       : k(metrics), ds_different(metrics), ds_similar(metrics), bw(metrics) {}
 };
 
-// One block's counts of metric m (its differences dm), found in the order of the pairs' |d|
-// (one sweep of each sorted array; the order split between threads): ds[i] for every pair (when
-// DS is analysed), bw[i] for the different ones.
-void count_block(const Analysis& a, std::size_t m, const std::int8_t* label, std::size_t count,
-                 const double* dm, std::uint32_t* ds, std::uint32_t* bw) {
-  std::vector<std::pair<double, std::uint32_t>> order;  // (|d|, pair in the block)
-  order.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (a.ds || label[i] != 0) order.emplace_back(std::fabs(dm[i]), static_cast<std::uint32_t>(i));
-  }
-  __gnu_parallel::sort(order.begin(), order.end());  // unique keys: one result
-  const auto parts = static_cast<std::ptrdiff_t>(std::min<std::size_t>(
-      static_cast<std::size_t>(omp_get_max_threads()), 1 + order.size() / 4096));
-#pragma omp parallel for schedule(static, 1)
-  for (std::ptrdiff_t part = 0; part < parts; ++part) {
-    const auto at = [&](std::ptrdiff_t p) {
-      return order.size() * static_cast<std::size_t>(p) / static_cast<std::size_t>(parts);
-    };
-    Counter counter(a.sorted[m]);  // its first search gallops from 0
-    for (std::size_t o = at(part); o < at(part + 1); ++o) {
-      const std::uint32_t i = order[o].second;
-      const int l = label[i];
-      const double x = dm[i];
-      const double ax = std::fabs(x);  // counts below 2^32 (kMaxPairs)
-      if (a.ds) {
-        ds[i] =
-            static_cast<std::uint32_t>(l != 0 ? counter.ds_different(ax) : counter.ds_similar(ax));
-      }
-      if (l != 0) bw[i] = static_cast<std::uint32_t>(counter.bw(l == 1 ? x : -x));
-    }
-  }
-}
-
 // The cross sums sum c_a c_b (a < b) of the three lists, pair by pair (needed with 2 metrics or
-// more): exact integer sums, so the blocks' parts are summed in any order.
+// more), each pair's counts looked up in each metric's indexed arrays: exact integer sums, so
+// the pairs are split between threads and summed in any order.
 void cross_pass(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs) {
   const std::size_t k = a.k;
-  std::vector<std::uint32_t> ds(k * kBlock), bw(k * kBlock);
+  // Pairs per chunk: enough lookups in flight to hide the memory's latency, few enough that
+  // what they touch stays in L1.
+  constexpr std::size_t kChunk = 16;
   pairs([&](std::size_t begin, std::size_t count, const double* d) {
     const std::int8_t* label = labels.data() + begin;
-    for (std::size_t m = 0; m < k; ++m) {
-      count_block(a, m, label, count, d + m * count, ds.data() + m * count, bw.data() + m * count);
-    }
+    // Every count of pair i under each metric, through the Search kind of counts (c[m]).
+    const auto counts = [&](auto& c, std::size_t i, std::uint64_t* ds, std::uint64_t* bw) {
+      const int l = label[i];
+      for (std::size_t m = 0; m < k; ++m) {
+        const double x = d[m * count + i];
+        if (a.ds) ds[m] = l != 0 ? c[m].ds_different(std::fabs(x)) : c[m].ds_similar(std::fabs(x));
+        if (l != 0) bw[m] = c[m].bw(l == 1 ? x : -x);
+      }
+    };
+    const std::size_t chunks = (count + kChunk - 1) / kChunk;
 #pragma omp parallel
     {
       CountSums different(k), similar(k), better(k);
-#pragma omp for schedule(static)
-      for (std::ptrdiff_t p = 0; p < static_cast<std::ptrdiff_t>(count); ++p) {
-        const auto i = static_cast<std::size_t>(p);
-        const bool dif = label[i] != 0;
-        for (std::size_t x = 0; x < k; ++x) {
-          for (std::size_t y = x + 1; y < k; ++y) {
-            if (a.ds) {
-              (dif ? different : similar).cross[x * k + y] +=
-                  std::uint64_t(ds[x * count + i]) * ds[y * count + i];
-            }
-            if (dif)
-              better.cross[x * k + y] += std::uint64_t(bw[x * count + i]) * bw[y * count + i];
-          }
+      std::vector<Counts<TouchIndex>> index(a.sorted.begin(), a.sorted.end());
+      std::vector<Counts<TouchValues>> values(a.sorted.begin(), a.sorted.end());
+      std::vector<Lookup> lookups(a.sorted.begin(), a.sorted.end());
+      std::vector<std::uint64_t> ds(k), bw(k);  // counts below 2^32 (kMaxPairs)
+      // This thread's chunks [c0, c1), pipelined: chunk c's index entries are touched two steps
+      // before it is counted, its values one step before.
+      const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+      const auto thread = static_cast<std::size_t>(omp_get_thread_num());
+      const std::size_t c0 = chunks * thread / threads, c1 = chunks * (thread + 1) / threads;
+      const auto each = [&](std::size_t c, const auto& fn) {
+        for (std::size_t i = c * kChunk; i < std::min(count, (c + 1) * kChunk); ++i) fn(i);
+      };
+      for (std::size_t c = c0; c < c1 + 2; ++c) {
+        if (c < c1) each(c, [&](std::size_t i) { counts(index, i, ds.data(), bw.data()); });
+        if (c >= c0 + 1 && c - 1 < c1) {
+          each(c - 1, [&](std::size_t i) { counts(values, i, ds.data(), bw.data()); });
         }
+        if (c < c0 + 2) continue;
+        each(c - 2, [&](std::size_t i) {
+          counts(lookups, i, ds.data(), bw.data());
+          const bool dif = label[i] != 0;
+          for (std::size_t x = 0; x < k; ++x) {
+            for (std::size_t y = x + 1; y < k; ++y) {
+              if (a.ds) (dif ? different : similar).cross[x * k + y] += ds[x] * ds[y];
+              if (dif) better.cross[x * k + y] += bw[x] * bw[y];
+            }
+          }
+        });
       }
 #pragma omp critical
       {
@@ -332,48 +429,77 @@ void cross_pass(Analysis& a, const std::vector<std::int8_t>& labels, const PairB
   });
 }
 
-// Sorts each metric's values (two passes over the pairs: counts, then the values).
+// The array (0 S, 1 B > 0, 2 -B for B < 0; 3 B == 0, no array) a pair labelled l with
+// difference d goes to, and its value there.
+int place(int l, double d, double& value) {
+  const double b = l == 1 ? d : -d;
+  value = std::fabs(d);
+  return l == 0 ? 0 : b > 0 ? 1 : b < 0 ? 2 : 3;
+}
+
+// Sorts each metric's values by buckets: one pass over the pairs for the arrays' sizes and
+// ranges, one to count each coarse bucket's values, one to place them in their buckets; then
+// the buckets are sorted (in parallel: a multiset of doubles has one sorted order, so the same
+// arrays on any number of threads) and indexed.
 void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs) {
-  a.sorted.resize(a.k);
-  std::vector<std::uint64_t> positive(a.k), negative(a.k);
-  pairs([&](std::size_t begin, std::size_t count, const double* d) {
-    for (std::size_t m = 0; m < a.k; ++m) {
-      for (std::size_t i = 0; i < count; ++i) {
-        const int l = labels[begin + i];
-        const double b = l == 1 ? d[m * count + i] : -d[m * count + i];
-        if (l == 0) continue;
-        positive[m] += b > 0;
-        negative[m] += b < 0;
-      }
-    }
-  });
-  for (std::size_t m = 0; m < a.k; ++m) {
-    a.sorted[m].similar.reserve(a.similar);
-    a.sorted[m].positive.reserve(positive[m]);
-    a.sorted[m].negative.reserve(negative[m]);
-  }
-  pairs([&](std::size_t begin, std::size_t count, const double* d) {
-    for (std::size_t m = 0; m < a.k; ++m) {
-      SortedValues& s = a.sorted[m];
-      for (std::size_t i = 0; i < count; ++i) {
-        const int l = labels[begin + i];
-        const double b = l == 1 ? d[m * count + i] : -d[m * count + i];
-        if (l == 0) {
-          s.similar.push_back(std::fabs(b));
-        } else if (b > 0) {
-          s.positive.push_back(b);
-        } else if (b < 0) {
-          s.negative.push_back(-b);
-        } else {
-          ++s.zeros;
+  const std::size_t k = a.k;
+  a.sorted.resize(k);
+  const auto arrays = [&a](std::size_t m) {
+    SortedValues& s = a.sorted[m];
+    return std::array<IndexedValues*, 3>{&s.similar, &s.positive, &s.negative};
+  };
+  std::vector<std::array<std::size_t, 4>> sizes(k, {0, 0, 0, 0});
+  std::vector<std::array<double, 3>> ranges(k, {0, 0, 0});
+  const auto each_value = [&](const auto& fn) {
+    pairs([&](std::size_t begin, std::size_t count, const double* d) {
+      for (std::size_t m = 0; m < k; ++m) {
+        for (std::size_t i = 0; i < count; ++i) {
+          double v = 0;
+          const int w = place(labels[begin + i], d[m * count + i], v);
+          fn(m, w, v);
         }
       }
-    }
+    });
+  };
+  each_value([&](std::size_t m, int w, double v) {
+    ++sizes[m][w];
+    if (w < 3) ranges[m][w] = std::max(ranges[m][w], v);
   });
-  for (SortedValues& s : a.sorted) {
-    for (std::vector<double>* v : {&s.similar, &s.positive, &s.negative}) {
-      // In place (no copy of 8 bytes a pair); a multiset of doubles >= 0: one result.
-      __gnu_parallel::sort(v->begin(), v->end(), __gnu_parallel::balanced_quicksort_tag());
+  // Coarse buckets of ~4096 values (32 KB: each sorted in the core's cache).
+  std::vector<std::array<BucketKey, 3>> keys(k);
+  std::vector<std::array<std::vector<std::size_t>, 3>> at(k);  // each bucket's next slot
+  for (std::size_t m = 0; m < k; ++m) {
+    a.sorted[m].zeros = sizes[m][3];
+    for (int w = 0; w < 3; ++w) {
+      const std::size_t buckets = std::clamp<std::size_t>(sizes[m][w] >> 12, 1, 1 << 16);
+      keys[m][w] = BucketKey(ranges[m][w], buckets);
+      at[m][w].assign(buckets + 1, 0);
+      std::vector<double>& v = arrays(m)[w]->v;  // read at random in the cross pass
+      reserve_with_huge_pages(v, sizes[m][w]);
+      v.resize(sizes[m][w]);
+    }
+  }
+  each_value([&](std::size_t m, int w, double v) {
+    if (w < 3) ++at[m][w][keys[m][w](v) + 1];
+  });
+  for (auto& per_metric : at) {
+    for (std::vector<std::size_t>& c : per_metric) std::partial_sum(c.begin(), c.end(), c.begin());
+  }
+  std::vector<std::array<std::vector<std::size_t>, 3>> next = at;
+  each_value([&](std::size_t m, int w, double v) {
+    if (w < 3) arrays(m)[w]->v[next[m][w][keys[m][w](v)]++] = v;
+  });
+  for (std::size_t m = 0; m < k; ++m) {
+    for (int w = 0; w < 3; ++w) {
+      std::vector<double>& v = arrays(m)[w]->v;
+      const std::vector<std::size_t>& bucket = at[m][w];
+      const auto buckets = static_cast<std::ptrdiff_t>(bucket.size() - 1);
+#pragma omp parallel for schedule(dynamic, 16)
+      for (std::ptrdiff_t b = 0; b < buckets; ++b) {
+        std::sort(v.begin() + static_cast<std::ptrdiff_t>(bucket[b]),
+                  v.begin() + static_cast<std::ptrdiff_t>(bucket[b + 1]));
+      }
+      arrays(m)[w]->index(ranges[m][w]);
     }
   }
 }
@@ -443,7 +569,7 @@ KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
     km.se_bw = std::sqrt(r.cov_bw[m * k + m]);
     // B > 0 and W = -B < 0: the pairs ordered right, counted in both lists.
     km.c0 = static_cast<double>(2 * s.positive.size()) / (2 * md);
-    const std::vector<double>& sim = s.similar;
+    const std::vector<double>& sim = s.similar.v;
     km.thr_numpy = sim.empty() ? kNaN : percentile_numpy(sim, 0.95);
     km.thr_prctile = sim.empty() ? kNaN : percentile_prctile(sim, 0.95);
     r.metrics.push_back(km);

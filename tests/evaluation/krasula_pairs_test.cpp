@@ -275,6 +275,30 @@ TEST(KrasulaPairs, SortedEqualsListedOverSeveralBlocks) {
                      listed_analysis(listed_differences(scores, pairs), labels));
 }
 
+// Scores whose differences crowd a few of the lookup index's buckets (an outlier stretching the
+// range, a constant metric, values near the smallest doubles, heavy ties): the counts only read
+// a value's own bucket, so a crowded or empty bucket must still give every listed value.
+TEST(KrasulaPairs, SortedEqualsListedOnCrowdedBuckets) {
+  std::mt19937_64 rng(3737);
+  const std::size_t stimuli = 700;  // 244,650 pairs
+  std::uniform_real_distribution<double> mos_draw(1, 5), sd_draw(0.3, 1.2);
+  std::normal_distribution<double> normal;
+  std::vector<double> mos, sd, n(stimuli, 15);
+  std::vector<std::vector<double>> scores(4);
+  for (std::size_t i = 0; i < stimuli; ++i) {
+    mos.push_back(mos_draw(rng));
+    sd.push_back(sd_draw(rng));
+    scores[0].push_back(i == 17 ? 1e6 : normal(rng));                 // one outlier
+    scores[1].push_back(2.5);                                         // constant: every d is 0
+    scores[2].push_back(std::ldexp(normal(rng), -1060));              // subnormal differences
+    scores[3].push_back(i % 7 == 0 ? 1e3 : std::round(normal(rng)));  // ties, two clusters
+  }
+  const PairLabels pairs = label_pairs_j149(mos, sd, n);
+  const std::vector<int> labels(pairs.label.begin(), pairs.label.end());
+  expect_same_result(krasula_analysis(scores, pairs),
+                     listed_analysis(listed_differences(scores, pairs), labels));
+}
+
 // The generated layouts are the pairs the nested loops list, in their order.
 TEST(KrasulaPairs, GeneratedPairsAreTheListedOnes) {
   const std::vector<std::string> groups = {"b", "a", "b", "b", "a", "c"};
