@@ -46,21 +46,23 @@ class Sum {
 
 // numpy.percentile's default ("linear": position (n - 1) p between the sorted values, with
 // numpy's _lerp, which interpolates from the upper value when t >= 0.5).
-double percentile_numpy(const std::vector<double>& x, double p) {  // x sorted
+template <class Sorted>
+double percentile_numpy(const Sorted& x, double p) {  // x sorted
   const double h = (static_cast<double>(x.size()) - 1) * p;
   const std::size_t lo = static_cast<std::size_t>(std::floor(h));
-  if (lo + 1 >= x.size()) return x.back();
+  if (lo + 1 >= x.size()) return x[x.size() - 1];
   const double t = h - static_cast<double>(lo), a = x[lo], b = x[lo + 1], diff = b - a;
   return t >= 0.5 ? b - diff * (1 - t) : a + diff * t;
 }
 
 // MATLAB's / Octave's prctile (Hazen): x_(k) at p = (k - 0.5) / n, linear between, the extremes
 // beyond.
-double percentile_prctile(const std::vector<double>& x, double p) {  // x sorted
+template <class Sorted>
+double percentile_prctile(const Sorted& x, double p) {  // x sorted
   const double n = static_cast<double>(x.size());
   const double pos = n * p + 0.5;  // 1-based
-  if (pos <= 1) return x.front();
-  if (pos >= n) return x.back();
+  if (pos <= 1) return x[0];
+  if (pos >= n) return x[x.size() - 1];
   const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
   const double t = pos - static_cast<double>(lo);
   return x[lo - 1] + t * (x[lo] - x[lo - 1]);
@@ -97,51 +99,110 @@ class BucketKey {
   std::size_t last_ = 0;
 };
 
-// A sorted array of values >= 0 with a bucket index (about 16 values a bucket), so that a count
-// at any x reads one index entry and x's bucket: a few cache lines, where a binary search of a
-// 25 M array reads ~25.
-struct IndexedValues {
-  std::vector<double> v;  // ascending
-  BucketKey key;
-  std::vector<std::uint32_t> start;  // bucket b: [start[b], start[b + 1]); below kMaxPairs
-  std::size_t size() const { return v.size(); }
+// Pairs of stimuli whose indices fit 16 bits each are stored as one 32-bit token (a, b) with
+// s[a] - s[b] >= 0, their value recomputed from the scores when read (x - y = -(y - x) exactly,
+// so it is |d| bit for bit): half the memory of a double a pair (10,000 stimuli: 50 M pairs).
+constexpr std::size_t kPackedStimuli = std::size_t(1) << 16;
+
+std::uint32_t pair_token(std::uint32_t a, std::uint32_t b, double d) {
+  return d >= 0 ? a << 16 | b : b << 16 | a;
+}
+
+// A sorted array of values >= 0 (stored, or pair tokens) with a bucket index (about 16 values a
+// bucket), so that a count at any x reads one index entry and x's bucket: a few cache lines,
+// where a binary search of a 25 M array reads ~25.
+class IndexedValues {
+ public:
+  // n values, as tokens of pairs of `scores` when it is given, else stored.
+  void allocate(std::size_t n, const double* scores) {
+    scores_ = scores;
+    if (scores_ != nullptr) {
+      reserve_with_huge_pages(tokens_, n);  // read at random in the cross pass
+      tokens_.resize(n);
+    } else {
+      reserve_with_huge_pages(values_, n);
+      values_.resize(n);
+    }
+  }
+  void put(std::size_t at, double value, std::uint32_t token) {
+    if (scores_ != nullptr)
+      tokens_[at] = token;
+    else
+      values_[at] = value;
+  }
+  std::size_t size() const { return scores_ != nullptr ? tokens_.size() : values_.size(); }
+  double operator[](std::size_t i) const {
+    if (scores_ == nullptr) return values_[i];
+    const std::uint32_t t = tokens_[i];
+    return scores_[t >> 16] - scores_[t & 0xFFFF];
+  }
+  std::uint32_t token(std::size_t i) const { return tokens_[i]; }
+  const void* address(std::size_t i) const {
+    return scores_ != nullptr ? static_cast<const void*>(tokens_.data() + i)
+                              : static_cast<const void*>(values_.data() + i);
+  }
+  // Sorts [lo, hi) (a multiset of doubles has one sorted order; tokens of equal values are
+  // ordered by token), with `scratch` for the tokens' values.
+  void sort(std::size_t lo, std::size_t hi,
+            std::vector<std::pair<double, std::uint32_t>>& scratch) {
+    const auto at = [](auto& v, std::size_t i) {
+      return v.begin() + static_cast<std::ptrdiff_t>(i);
+    };
+    if (scores_ == nullptr) {
+      std::sort(at(values_, lo), at(values_, hi));
+      return;
+    }
+    scratch.clear();
+    for (std::size_t i = lo; i < hi; ++i) scratch.emplace_back((*this)[i], tokens_[i]);
+    std::sort(scratch.begin(), scratch.end());
+    for (std::size_t i = lo; i < hi; ++i) tokens_[i] = scratch[i - lo].second;
+  }
+  // The first index in [lo, hi) whose value fails `before` (which holds for a prefix).
+  template <class Before>
+  std::size_t partition_point(std::size_t lo, std::size_t hi, Before before) const {
+    while (lo < hi) {
+      const std::size_t mid = lo + (hi - lo) / 2;
+      if (before((*this)[mid]))
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    return lo;
+  }
   // Builds the index of the sorted values (one pass).
   void index(double range) {
-    const std::size_t buckets = std::max<std::size_t>(1, v.size() / 16);
+    const std::size_t n = size(), buckets = std::max<std::size_t>(1, n / 16);
     key = BucketKey(range, buckets);
     reserve_with_huge_pages(start, buckets + 1);
-    start.assign(buckets + 1, static_cast<std::uint32_t>(v.size()));
+    start.assign(buckets + 1, static_cast<std::uint32_t>(n));
     std::size_t next = 0;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      for (const std::size_t b = key(v[i]); next <= b; ++next)
+    for (std::size_t i = 0; i < n; ++i) {
+      for (const std::size_t b = key((*this)[i]); next <= b; ++next) {
         start[next] = static_cast<std::uint32_t>(i);
+      }
     }
   }
   // {#{values < x}, #{values == x}}, at any x.
   std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
     const std::size_t b = key(x);
     const std::size_t lo = start[b], hi = start[b + 1];
-    if (lo == hi || x < v[lo]) return {lo, 0};
-    if (x > v[hi - 1]) return {hi, 0};
-    if (v[lo] == v[hi - 1]) return {lo, hi - lo};  // one distinct value, and x is it
-    const auto first = v.begin() + static_cast<std::ptrdiff_t>(lo);
-    const auto last = v.begin() + static_cast<std::ptrdiff_t>(hi);
-    const auto l = std::lower_bound(first, last, x);
-    const auto u = std::upper_bound(l, last, x);
-    return {static_cast<std::uint64_t>(l - v.begin()), static_cast<std::uint64_t>(u - l)};
+    if (lo == hi) return {lo, 0};
+    const double first = (*this)[lo], last = (*this)[hi - 1];
+    if (x < first) return {lo, 0};
+    if (x > last) return {hi, 0};
+    if (first == last) return {lo, hi - lo};  // one distinct value, and x is it
+    const std::size_t l = partition_point(lo, hi, [x](double v) { return v < x; });
+    const std::size_t u = partition_point(l, hi, [x](double v) { return v <= x; });
+    return {l, u - l};
   }
-};
 
-// Counting at arbitrary x through the index (the pass over the pairs).
-class Probe {
- public:
-  explicit Probe(const IndexedValues& values) : v_(values) {}
-  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
-    return v_.below_and_equal(x);
-  }
+  BucketKey key;
+  std::vector<std::uint32_t> start;  // bucket b: [start[b], start[b + 1]); below kMaxPairs
 
  private:
-  const IndexedValues& v_;
+  const double* scores_ = nullptr;
+  std::vector<double> values_;
+  std::vector<std::uint32_t> tokens_;
 };
 
 // Counting in a sorted array at ascending query values: each search starts where the last one
@@ -149,7 +210,7 @@ class Probe {
 // order (the sums over one metric's own sorted values) sweep the array once.
 class Sweep {
  public:
-  explicit Sweep(const IndexedValues& sorted) : v_(sorted.v) {}
+  explicit Sweep(const IndexedValues& sorted) : v_(sorted) {}
   // {#{values < x}, #{values == x}}; x at least the previous query's.
   std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) {
     at_ = gallop(at_, [x](double v) { return v < x; });
@@ -167,14 +228,22 @@ class Sweep {
       hi += step;
       step *= 2;
     }
-    hi = std::min(hi, v_.size());
-    return static_cast<std::size_t>(
-        std::partition_point(v_.begin() + static_cast<std::ptrdiff_t>(lo),
-                             v_.begin() + static_cast<std::ptrdiff_t>(hi), before) -
-        v_.begin());
+    return v_.partition_point(lo, std::min(hi, v_.size()), before);
   }
-  const std::vector<double>& v_;
+  const IndexedValues& v_;
   std::size_t at_ = 0;
+};
+
+// Counting at arbitrary x through the index (the pass over the pairs).
+class Probe {
+ public:
+  explicit Probe(const IndexedValues& values) : v_(values) {}
+  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
+    return v_.below_and_equal(x);
+  }
+
+ private:
+  const IndexedValues& v_;
 };
 
 // Probe's interface, but only touching what a count at x will read, so that the cross pass can
@@ -198,8 +267,8 @@ class TouchValues {
   std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
     const std::size_t b = v_.key(x), lo = v_.start[b], hi = v_.start[b + 1];
     if (lo < hi) {
-      __builtin_prefetch(v_.v.data() + lo);
-      __builtin_prefetch(v_.v.data() + hi - 1);
+      __builtin_prefetch(v_.address(lo));
+      __builtin_prefetch(v_.address(hi - 1));
     }
     return {0, 0};
   }
@@ -216,6 +285,9 @@ struct SortedValues {
   IndexedValues positive;   // B > 0, ascending
   IndexedValues negative;   // -B for B < 0, ascending
   std::uint64_t zeros = 0;  // B == 0
+  // With tokens, the B == 0 pairs' tokens oriented by their label (B of another metric is
+  // s[a] - s[b]); kept for the first metric only (the cross sweep).
+  std::vector<std::uint32_t> zero_tokens;
 };
 
 // The structural-component counts of one metric's pairs, at their |d| in ascending order (a
@@ -257,9 +329,12 @@ class Counts {
 using Counter = Counts<Sweep>;  // queries in ascending order
 using Lookup = Counts<Probe>;   // queries in any order
 
-// Pairs in blocks: fn(begin, count, d) with d[m * count + i] metric m's difference of pair
-// begin + i, for consecutive blocks in pair order.
-using BlockFn = std::function<void(std::size_t begin, std::size_t count, const double* d)>;
+// Pairs in blocks: fn(begin, count, d, first, second) with d[m * count + i] metric m's
+// difference s_m[first[i]] - s_m[second[i]] of pair begin + i, for consecutive blocks in pair
+// order; first and second are null unless the pairs' stimuli (and the scores) are known and
+// fewer than kPackedStimuli.
+using BlockFn = std::function<void(std::size_t begin, std::size_t count, const double* d,
+                                   const std::uint32_t* first, const std::uint32_t* second)>;
 using PairBlocks = std::function<void(const BlockFn&)>;
 // Pairs generated at a time: a few MB of differences.
 constexpr std::size_t kBlock = std::size_t(1) << 18;
@@ -303,7 +378,7 @@ struct CountSums {
 // zeros and up to two ascending arrays of values >= 0.
 class Distinct {
  public:
-  Distinct(const std::vector<double>& a, const std::vector<double>* b, std::uint64_t zeros)
+  Distinct(const IndexedValues& a, const IndexedValues* b, std::uint64_t zeros)
       : a_(a), b_(b != nullptr ? *b : empty_), zeros_(zeros) {}
   bool next(double& x, std::uint64_t& count) {
     const double inf = std::numeric_limits<double>::infinity();
@@ -318,9 +393,9 @@ class Distinct {
   }
 
  private:
-  static inline const std::vector<double> empty_{};
-  const std::vector<double>& a_;
-  const std::vector<double>& b_;
+  static inline const IndexedValues empty_{};
+  const IndexedValues& a_;
+  const IndexedValues& b_;
   std::uint64_t zeros_;
   std::size_t i_ = 0, j_ = 0;
 };
@@ -342,16 +417,16 @@ MetricSums sweep_sorted(const SortedValues& s, bool ds) {
   };
   if (ds) {
     Counter different(s), similar(s);
-    for (Distinct d(s.positive.v, &s.negative.v, s.zeros); d.next(x, w);) {
+    for (Distinct d(s.positive, &s.negative, s.zeros); d.next(x, w);) {
       add(different.ds_different(x), r.ds_different, r.ds_different_sq);
     }
-    for (Distinct d(s.similar.v, nullptr, 0); d.next(x, w);) {
+    for (Distinct d(s.similar, nullptr, 0); d.next(x, w);) {
       add(similar.ds_similar(x), r.ds_similar, r.ds_similar_sq);
     }
   }
   Counter above(s), below(s);  // B > 0 (queries the negative array), B < 0 (the positive one)
-  for (Distinct d(s.positive.v, nullptr, 0); d.next(x, w);) add(above.bw(x), r.bw, r.bw_sq);
-  for (Distinct d(s.negative.v, nullptr, 0); d.next(x, w);) add(below.bw(-x), r.bw, r.bw_sq);
+  for (Distinct d(s.positive, nullptr, 0); d.next(x, w);) add(above.bw(x), r.bw, r.bw_sq);
+  for (Distinct d(s.negative, nullptr, 0); d.next(x, w);) add(below.bw(-x), r.bw, r.bw_sq);
   w = s.zeros;
   add(below.bw(0), r.bw, r.bw_sq);
   return r;
@@ -361,6 +436,7 @@ struct Analysis {
   std::size_t k = 0, different = 0, similar = 0;
   bool ds = false;
   std::vector<SortedValues> sorted;
+  std::vector<const double*> scores;  // with pair tokens: each metric's scores
   // The three lists' sums: DS's different pairs, its similar pairs, BW's B values.
   CountSums ds_different, ds_similar, bw;
   explicit Analysis(std::size_t metrics)
@@ -375,7 +451,8 @@ void cross_pass(Analysis& a, const std::vector<std::int8_t>& labels, const PairB
   // Pairs per chunk: enough lookups in flight to hide the memory's latency, few enough that
   // what they touch stays in L1.
   constexpr std::size_t kChunk = 16;
-  pairs([&](std::size_t begin, std::size_t count, const double* d) {
+  pairs([&](std::size_t begin, std::size_t count, const double* d, const std::uint32_t*,
+            const std::uint32_t*) {
     const std::int8_t* label = labels.data() + begin;
     // Every count of pair i under each metric, through the Search kind of counts (c[m]).
     const auto counts = [&](auto& c, std::size_t i, std::uint64_t* ds, std::uint64_t* bw) {
@@ -429,6 +506,65 @@ void cross_pass(Analysis& a, const std::vector<std::int8_t>& labels, const PairB
   });
 }
 
+// The cross sums with pair tokens: the first metric's sorted arrays (and its B == 0 tokens) name
+// every pair once, with its label's class, so they are read in order (the first metric's counts
+// from sweeps) and only the other metrics' counts are looked up, at B = +-(s[a] - s[b]): a
+// token (a, b) in the positive array has l d = s[a] - s[b] under every metric (d's orientation
+// and l's cancel), in the negative array s[b] - s[a]. Exact integer sums: any split of threads.
+void cross_sweep(Analysis& a) {
+  const std::size_t k = a.k;
+  const SortedValues& first = a.sorted[0];
+  // list 0: S (similar pairs); 1: B > 0; 2: B < 0 (both different pairs); 3: B == 0.
+  for (int list = a.ds ? 0 : 1; list < 4; ++list) {
+    const IndexedValues* values = list == 0   ? &first.similar
+                                  : list == 1 ? &first.positive
+                                              : &first.negative;
+    const std::size_t n = list == 3 ? first.zero_tokens.size() : values->size();
+#pragma omp parallel
+    {
+      CountSums different(k), similar(k), better(k);
+      Counter sweep(first);  // ascending x in this thread's share
+      std::vector<Lookup> lookups(a.sorted.begin(), a.sorted.end());
+      std::vector<std::uint64_t> ds(k), bw(k);  // counts below 2^32 (kMaxPairs)
+#pragma omp for schedule(static)
+      for (std::ptrdiff_t p = 0; p < static_cast<std::ptrdiff_t>(n); ++p) {
+        const auto i = static_cast<std::size_t>(p);
+        const std::uint32_t t = list == 3 ? first.zero_tokens[i] : values->token(i);
+        const std::size_t sa = t >> 16, sb = t & 0xFFFF;
+        const double x = list == 3 ? 0.0 : (*values)[i];
+        if (list == 0) {
+          ds[0] = sweep.ds_similar(x);
+          for (std::size_t m = 1; m < k; ++m) {
+            ds[m] = lookups[m].ds_similar(std::fabs(a.scores[m][sa] - a.scores[m][sb]));
+          }
+        } else {
+          if (a.ds) ds[0] = sweep.ds_different(x);
+          bw[0] = sweep.bw(list == 2 ? -x : x);
+          for (std::size_t m = 1; m < k; ++m) {
+            const double b =
+                list == 2 ? a.scores[m][sb] - a.scores[m][sa] : a.scores[m][sa] - a.scores[m][sb];
+            if (a.ds) ds[m] = lookups[m].ds_different(std::fabs(b));
+            bw[m] = lookups[m].bw(b);
+          }
+        }
+        for (std::size_t u = 0; u < k; ++u) {
+          for (std::size_t v = u + 1; v < k; ++v) {
+            if (list == 0) similar.cross[u * k + v] += ds[u] * ds[v];
+            if (list != 0 && a.ds) different.cross[u * k + v] += ds[u] * ds[v];
+            if (list != 0) better.cross[u * k + v] += bw[u] * bw[v];
+          }
+        }
+      }
+#pragma omp critical
+      {
+        a.ds_different.merge(different);
+        a.ds_similar.merge(similar);
+        a.bw.merge(better);
+      }
+    }
+  }
+}
+
 // The array (0 S, 1 B > 0, 2 -B for B < 0; 3 B == 0, no array) a pair labelled l with
 // difference d goes to, and its value there.
 int place(int l, double d, double& value) {
@@ -440,10 +576,13 @@ int place(int l, double d, double& value) {
 // Sorts each metric's values by buckets: one pass over the pairs for the arrays' sizes and
 // ranges, one to count each coarse bucket's values, one to place them in their buckets; then
 // the buckets are sorted (in parallel: a multiset of doubles has one sorted order, so the same
-// arrays on any number of threads) and indexed.
-void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs) {
+// arrays on any number of threads) and indexed. With `scores` (one per metric; the blocks then
+// name the pairs' stimuli), the arrays hold pair tokens.
+void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs,
+                 const std::vector<const double*>& scores) {
   const std::size_t k = a.k;
   a.sorted.resize(k);
+  a.scores = scores;
   const auto arrays = [&a](std::size_t m) {
     SortedValues& s = a.sorted[m];
     return std::array<IndexedValues*, 3>{&s.similar, &s.positive, &s.negative};
@@ -451,55 +590,64 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
   std::vector<std::array<std::size_t, 4>> sizes(k, {0, 0, 0, 0});
   std::vector<std::array<double, 3>> ranges(k, {0, 0, 0});
   const auto each_value = [&](const auto& fn) {
-    pairs([&](std::size_t begin, std::size_t count, const double* d) {
+    pairs([&](std::size_t begin, std::size_t count, const double* d, const std::uint32_t* first,
+              const std::uint32_t* second) {
       for (std::size_t m = 0; m < k; ++m) {
         for (std::size_t i = 0; i < count; ++i) {
           double v = 0;
-          const int w = place(labels[begin + i], d[m * count + i], v);
-          fn(m, w, v);
+          const double dm = d[m * count + i];
+          const int l = labels[begin + i], w = place(l, dm, v);
+          // B == 0 (w 3): oriented by the label, so that B = s[a] - s[b] under every metric.
+          fn(m, w, v, first == nullptr ? 0 : pair_token(first[i], second[i], w == 3 ? l : dm));
         }
       }
     });
   };
-  each_value([&](std::size_t m, int w, double v) {
+  each_value([&](std::size_t m, int w, double v, std::uint32_t) {
     ++sizes[m][w];
     if (w < 3) ranges[m][w] = std::max(ranges[m][w], v);
   });
-  // Coarse buckets of ~4096 values (32 KB: each sorted in the core's cache).
+  // Coarse buckets of ~256 values (each sorted in the core's L1 cache).
   std::vector<std::array<BucketKey, 3>> keys(k);
   std::vector<std::array<std::vector<std::size_t>, 3>> at(k);  // each bucket's next slot
   for (std::size_t m = 0; m < k; ++m) {
     a.sorted[m].zeros = sizes[m][3];
     for (int w = 0; w < 3; ++w) {
-      const std::size_t buckets = std::clamp<std::size_t>(sizes[m][w] >> 12, 1, 1 << 16);
+      const std::size_t buckets = std::clamp<std::size_t>(sizes[m][w] >> 8, 1, 1 << 18);
       keys[m][w] = BucketKey(ranges[m][w], buckets);
       at[m][w].assign(buckets + 1, 0);
-      std::vector<double>& v = arrays(m)[w]->v;  // read at random in the cross pass
-      reserve_with_huge_pages(v, sizes[m][w]);
-      v.resize(sizes[m][w]);
+      arrays(m)[w]->allocate(sizes[m][w], scores.empty() ? nullptr : scores[m]);
     }
   }
-  each_value([&](std::size_t m, int w, double v) {
+  each_value([&](std::size_t m, int w, double v, std::uint32_t) {
     if (w < 3) ++at[m][w][keys[m][w](v) + 1];
   });
   for (auto& per_metric : at) {
     for (std::vector<std::size_t>& c : per_metric) std::partial_sum(c.begin(), c.end(), c.begin());
   }
   std::vector<std::array<std::vector<std::size_t>, 3>> next = at;
-  each_value([&](std::size_t m, int w, double v) {
-    if (w < 3) arrays(m)[w]->v[next[m][w][keys[m][w](v)]++] = v;
+  if (!scores.empty()) a.sorted[0].zero_tokens.reserve(sizes[0][3]);
+  each_value([&](std::size_t m, int w, double v, std::uint32_t token) {
+    if (w < 3)
+      arrays(m)[w]->put(next[m][w][keys[m][w](v)]++, v, token);
+    else if (m == 0 && !scores.empty())
+      a.sorted[0].zero_tokens.push_back(token);
   });
   for (std::size_t m = 0; m < k; ++m) {
     for (int w = 0; w < 3; ++w) {
-      std::vector<double>& v = arrays(m)[w]->v;
+      IndexedValues& v = *arrays(m)[w];
       const std::vector<std::size_t>& bucket = at[m][w];
       const auto buckets = static_cast<std::ptrdiff_t>(bucket.size() - 1);
-#pragma omp parallel for schedule(dynamic, 16)
-      for (std::ptrdiff_t b = 0; b < buckets; ++b) {
-        std::sort(v.begin() + static_cast<std::ptrdiff_t>(bucket[b]),
-                  v.begin() + static_cast<std::ptrdiff_t>(bucket[b + 1]));
+#pragma omp parallel
+      {
+        std::vector<std::pair<double, std::uint32_t>> scratch;
+#pragma omp for schedule(dynamic, 16)
+        for (std::ptrdiff_t b = 0; b < buckets; ++b) {
+          v.sort(bucket[static_cast<std::size_t>(b)], bucket[static_cast<std::size_t>(b) + 1],
+                 scratch);
+        }
       }
-      arrays(m)[w]->index(ranges[m][w]);
+      v.index(ranges[m][w]);
     }
   }
 }
@@ -515,7 +663,7 @@ double auc_of(std::uint64_t twice_counts, std::uint64_t m, double nd) {
 
 // Krasula's analysis of the pairs `pairs` gives (labels valid, at least 2 different pairs).
 KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
-                      const PairBlocks& pairs) {
+                      const PairBlocks& pairs, const std::vector<const double*>& scores) {
   KrasulaResult r;
   for (const std::int8_t l : labels) {
     r.different += l != 0;
@@ -530,7 +678,7 @@ KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
   a.different = r.different;
   a.similar = r.similar;
   a.ds = r.similar >= 2;
-  sort_values(a, labels, pairs);
+  sort_values(a, labels, pairs, scores);
   a.ds_different.count = a.bw.count = r.different;
   a.ds_similar.count = r.similar;
   for (std::size_t m = 0; m < k; ++m) {
@@ -542,7 +690,8 @@ KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
     a.bw.sum[m] = s.bw;
     a.bw.cross[m * k + m] = s.bw_sq;
   }
-  if (k >= 2) cross_pass(a, labels, pairs);
+  if (k >= 2 && !a.scores.empty()) cross_sweep(a);
+  if (k >= 2 && a.scores.empty()) cross_pass(a, labels, pairs);
   const double md = static_cast<double>(r.different), nd = static_cast<double>(r.similar);
   r.cov_ds = std::vector<double>(k * k, kNaN);
   r.cov_bw.resize(k * k);
@@ -569,9 +718,9 @@ KrasulaResult analyse(std::size_t k, const std::vector<std::int8_t>& labels,
     km.se_bw = std::sqrt(r.cov_bw[m * k + m]);
     // B > 0 and W = -B < 0: the pairs ordered right, counted in both lists.
     km.c0 = static_cast<double>(2 * s.positive.size()) / (2 * md);
-    const std::vector<double>& sim = s.similar.v;
-    km.thr_numpy = sim.empty() ? kNaN : percentile_numpy(sim, 0.95);
-    km.thr_prctile = sim.empty() ? kNaN : percentile_prctile(sim, 0.95);
+    const IndexedValues& sim = s.similar;
+    km.thr_numpy = sim.size() == 0 ? kNaN : percentile_numpy(sim, 0.95);
+    km.thr_prctile = sim.size() == 0 ? kNaN : percentile_prctile(sim, 0.95);
     r.metrics.push_back(km);
   }
   const double l = static_cast<double>(2 * r.different);
@@ -777,10 +926,10 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& differenc
         std::copy_n(differences[m].begin() + static_cast<std::ptrdiff_t>(begin), n,
                     d.begin() + m * n);
       }
-      fn(begin, n, d.data());
+      fn(begin, n, d.data(), nullptr, nullptr);
     }
   };
-  return analyse(k, small, blocks);
+  return analyse(k, small, blocks, {});
 }
 
 KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
@@ -795,8 +944,14 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
   for (const std::int8_t l : pairs.label) {
     require(l == -1 || l == 0 || l == 1, "Krasula analysis: a label other than -1, 0, 1");
   }
+  // Pairs of fewer than kPackedStimuli stimuli are stored as tokens (the blocks name them).
+  const bool packed = named <= kPackedStimuli;
+  std::vector<const double*> packed_scores;
+  for (const auto& s : scores) {
+    if (packed) packed_scores.push_back(s.data());
+  }
   const PairBlocks blocks = [&](const BlockFn& fn) {
-    std::vector<std::size_t> first(kBlock), second(kBlock);
+    std::vector<std::uint32_t> first(kBlock), second(kBlock);
     std::vector<double> d(k * kBlock);
     std::size_t begin = 0, n = 0;
     const auto flush = [&] {
@@ -808,18 +963,18 @@ KrasulaResult krasula_analysis(const std::vector<std::vector<double>>& scores,
           d[m * n + i] = x;
         }
       }
-      fn(begin, n, d.data());
+      fn(begin, n, d.data(), packed ? first.data() : nullptr, packed ? second.data() : nullptr);
       begin += n;
       n = 0;
     };
     pairs.for_each([&](std::size_t a, std::size_t b) {
-      first[n] = a;
-      second[n] = b;
+      first[n] = static_cast<std::uint32_t>(a);  // below 2^32 (PairLabels)
+      second[n] = static_cast<std::uint32_t>(b);
       if (++n == kBlock) flush();
     });
     if (n > 0) flush();
   };
-  return analyse(k, pairs.label, blocks);
+  return analyse(k, pairs.label, blocks, packed_scores);
 }
 
 }  // namespace qm3d::evaluation
