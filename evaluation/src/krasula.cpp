@@ -573,10 +573,25 @@ int place(int l, double d, double& value) {
   return l == 0 ? 0 : b > 0 ? 1 : b < 0 ? 2 : 3;
 }
 
+// Sorts each bucket [bucket[b], bucket[b + 1]) of `v` (in parallel: a multiset of doubles has
+// one sorted order, so the same array on any number of threads), then indexes it.
+void sort_buckets(IndexedValues& v, const std::vector<std::size_t>& bucket, double range) {
+  const auto buckets = static_cast<std::ptrdiff_t>(bucket.size() - 1);
+#pragma omp parallel
+  {
+    std::vector<std::pair<double, std::uint32_t>> scratch;
+#pragma omp for schedule(dynamic, 16)
+    for (std::ptrdiff_t b = 0; b < buckets; ++b) {
+      const auto i = static_cast<std::size_t>(b);
+      v.sort(bucket[i], bucket[i + 1], scratch);
+    }
+  }
+  v.index(range);
+}
+
 // Sorts each metric's values by buckets: one pass over the pairs for the arrays' sizes and
 // ranges, one to count each coarse bucket's values, one to place them in their buckets; then
-// the buckets are sorted (in parallel: a multiset of doubles has one sorted order, so the same
-// arrays on any number of threads) and indexed. With `scores` (one per metric; the blocks then
+// the buckets are sorted and indexed. With `scores` (one per metric; the blocks then
 // name the pairs' stimuli), the arrays hold pair tokens.
 void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const PairBlocks& pairs,
                  const std::vector<const double*>& scores) {
@@ -635,19 +650,7 @@ void sort_values(Analysis& a, const std::vector<std::int8_t>& labels, const Pair
   });
   for (std::size_t m = 0; m < k; ++m) {
     for (int w = 0; w < 3; ++w) {
-      IndexedValues& v = *arrays(m)[w];
-      const std::vector<std::size_t>& bucket = at[m][w];
-      const auto buckets = static_cast<std::ptrdiff_t>(bucket.size() - 1);
-#pragma omp parallel
-      {
-        std::vector<std::pair<double, std::uint32_t>> scratch;
-#pragma omp for schedule(dynamic, 16)
-        for (std::ptrdiff_t b = 0; b < buckets; ++b) {
-          v.sort(bucket[static_cast<std::size_t>(b)], bucket[static_cast<std::size_t>(b) + 1],
-                 scratch);
-        }
-      }
-      v.index(ranges[m][w]);
+      sort_buckets(*arrays(m)[w], at[m][w], ranges[m][w]);
     }
   }
 }
