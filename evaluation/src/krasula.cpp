@@ -14,7 +14,6 @@
 #include <parallel/algorithm>
 #include <stdexcept>
 
-#include "qm3d/common/large_arrays.h"
 #include "qm3d/evaluation/evaluation.h"
 #include "qm3d/evaluation/p1401.h"  // two_sided_normal_p
 
@@ -116,13 +115,11 @@ class IndexedValues {
   // n values, as tokens of pairs of `scores` when it is given, else stored.
   void allocate(std::size_t n, const double* scores) {
     scores_ = scores;
-    if (scores_ != nullptr) {
-      reserve_with_huge_pages(tokens_, n);  // read at random in the cross pass
+    // Plain pages: huge ones (madvise) cost more in the kernel's compaction than they saved.
+    if (scores_ != nullptr)
       tokens_.resize(n);
-    } else {
-      reserve_with_huge_pages(values_, n);
+    else
       values_.resize(n);
-    }
   }
   void put(std::size_t at, double value, std::uint32_t token) {
     if (scores_ != nullptr)
@@ -173,7 +170,6 @@ class IndexedValues {
   void index(double range) {
     const std::size_t n = size(), buckets = std::max<std::size_t>(1, n / 16);
     key = BucketKey(range, buckets);
-    reserve_with_huge_pages(start, buckets + 1);
     start.assign(buckets + 1, static_cast<std::uint32_t>(n));
     std::size_t next = 0;
     for (std::size_t i = 0; i < n; ++i) {
