@@ -121,6 +121,30 @@ XyzPlanes to_xyz(const RgbPlanes& in) {
   return out;
 }
 
+/// to_xyz of an image's 8-bit values themselves (no downsampling): each channel's
+/// srgb_to_linear(k / 255.0) taken from a table of the 256 values that very call gives, so
+/// the same bits as unit_planes then to_xyz without a call a channel.
+XyzPlanes to_xyz(const RgbImage& image) {
+  static const std::array<double, 256> linear = [] {
+    std::array<double, 256> t{};
+    for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(k / 255.0);
+    return t;
+  }();
+  const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
+  XyzPlanes out{image.height, image.width, std::vector<double>(n), std::vector<double>(n),
+                std::vector<double>(n)};
+  const Eigen::Matrix3d& m = rgb_to_xyz();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d rgb(linear[image.rgb[3 * i]], linear[image.rgb[3 * i + 1]],
+                              linear[image.rgb[3 * i + 2]]);
+    const Eigen::Vector3d xyz = m * rgb;
+    out.x[i] = xyz[0];
+    out.y[i] = xyz[1];
+    out.z[i] = xyz[2];
+  }
+  return out;
+}
+
 double lab_f(double t) {
   return t < kLabLinearBelow ? t * (841.0 / 108.0) + 4.0 / 29.0 : std::pow(t, 1.0 / 3.0);
 }
@@ -395,28 +419,29 @@ IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& tabl
                                 "x" + std::to_string(a.height) + " and " + std::to_string(b.width) +
                                 "x" + std::to_string(b.height) + ")");
   }
-  RgbPlanes pa = unit_planes(a), pb = unit_planes(b);
-  const int f = options.downsampling ? downsampling_factor(pa.rows, pa.cols) : 1;
-  if (f > 1) {
-    pa = box_downsample(pa, f);
-    pb = box_downsample(pb, f);
-  }
-  if (pa.rows < kWindowSize || pa.cols < kWindowSize) {
-    throw std::invalid_argument("icid: images of " + std::to_string(pa.cols) + "x" +
-                                std::to_string(pa.rows) +
+  const int f = options.downsampling ? downsampling_factor(a.height, a.width) : 1;
+  const int rows = (a.height + f - 1) / f, cols = (a.width + f - 1) / f;  // box_downsample's
+  if (rows < kWindowSize || cols < kWindowSize) {
+    throw std::invalid_argument("icid: images of " + std::to_string(cols) + "x" +
+                                std::to_string(rows) +
                                 " pixels (after downsampling); at least 11x11 needed");
   }
-  XyzPlanes xa = to_xyz(pa), xb = to_xyz(pb);
+  XyzPlanes xa, xb;
+  if (f > 1) {
+    xa = to_xyz(box_downsample(unit_planes(a), f));
+    xb = to_xyz(box_downsample(unit_planes(b), f));
+  } else {
+    xa = to_xyz(a);
+    xb = to_xyz(b);
+  }
   if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
   const Lab2000hlPlanes la = to_lab2000hl(xa, table), lb = to_lab2000hl(xb, table);
   MapScratch local;
-  MapScratch& m =
-      static_cast<std::size_t>(pa.rows) * pa.cols <= kScratchPixels ? map_scratch() : local;
+  MapScratch& m = static_cast<std::size_t>(rows) * cols <= kScratchPixels ? map_scratch() : local;
   quantities(la, lb, m.quantities);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(options.threads))
-  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], pa.rows, pa.cols, m.means[k]);
-  return pool_maps(m.means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options,
-                   m.terms);
+  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], rows, cols, m.means[k]);
+  return pool_maps(m.means, rows - 2 * kWindowRadius, cols - 2 * kWindowRadius, options, m.terms);
 }
 
 }  // namespace qm3d::render
