@@ -104,11 +104,18 @@ const Eigen::Matrix3d& rgb_to_xyz() {
   return m;
 }
 
+/// The planes sized for rows x cols (kept, not cleared, when they already are).
+void resize(XyzPlanes& p, int rows, int cols) {
+  p.rows = rows;
+  p.cols = cols;
+  const std::size_t n = static_cast<std::size_t>(rows) * cols;
+  for (auto* plane : {&p.x, &p.y, &p.z}) plane->resize(n);
+}
+
 /// Linearised (srgb_to_linear: colorspace.m's threshold 0.0404482362771076) and -> XYZ.
-XyzPlanes to_xyz(const RgbPlanes& in) {
+void to_xyz(const RgbPlanes& in, XyzPlanes& out) {
   const std::size_t n = in.c[0].size();
-  XyzPlanes out{in.rows, in.cols, std::vector<double>(n), std::vector<double>(n),
-                std::vector<double>(n)};
+  resize(out, in.rows, in.cols);
   const Eigen::Matrix3d& m = rgb_to_xyz();
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d rgb(srgb_to_linear(in.c[0][i]), srgb_to_linear(in.c[1][i]),
@@ -118,21 +125,19 @@ XyzPlanes to_xyz(const RgbPlanes& in) {
     out.y[i] = xyz[1];
     out.z[i] = xyz[2];
   }
-  return out;
 }
 
 /// to_xyz of an image's 8-bit values themselves (no downsampling): each channel's
 /// srgb_to_linear(k / 255.0) taken from a table of the 256 values that very call gives, so
 /// the same bits as unit_planes then to_xyz without a call a channel.
-XyzPlanes to_xyz(const RgbImage& image) {
+void to_xyz(const RgbImage& image, XyzPlanes& out) {
   static const std::array<double, 256> linear = [] {
     std::array<double, 256> t{};
     for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(k / 255.0);
     return t;
   }();
   const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
-  XyzPlanes out{image.height, image.width, std::vector<double>(n), std::vector<double>(n),
-                std::vector<double>(n)};
+  resize(out, image.height, image.width);
   const Eigen::Matrix3d& m = rgb_to_xyz();
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d rgb(linear[image.rgb[3 * i]], linear[image.rgb[3 * i + 1]],
@@ -142,7 +147,6 @@ XyzPlanes to_xyz(const RgbImage& image) {
     out.y[i] = xyz[1];
     out.z[i] = xyz[2];
   }
-  return out;
 }
 
 double lab_f(double t) {
@@ -156,9 +160,9 @@ struct Lab2000hlPlanes {
 
 /// XYZ -> CIELAB (white kWhite), clipped, -> LAB2000HL by the table (interp1 / interp2: linear
 /// and bilinear, the rules of Lab2000hlTable::from_cielab on the clipped values).
-Lab2000hlPlanes to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table) {
+void to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table, Lab2000hlPlanes& out) {
   const std::size_t n = in.x.size();
-  Lab2000hlPlanes out{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n)};
+  for (auto* plane : {&out.l, &out.a, &out.b}) plane->resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double fx = lab_f(in.x[i] / kWhite[0]);
     const double fy = lab_f(in.y[i] / kWhite[1]);
@@ -171,7 +175,6 @@ Lab2000hlPlanes to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table) {
     out.a[i] = hl.a;
     out.b[i] = hl.b;
   }
-  return out;
 }
 
 /// fspecial('gaussian', 11, 2): h(i, j) = exp(-(x^2 + y^2) / 8), x, y = -5..5, divided by
@@ -314,10 +317,13 @@ std::array<double, 7> inverse_maps(const std::array<double, kQuantities>& m,
           (c[6] + std::abs(sc12)) / (c[6] + sc1 * sc2)};
 }
 
-/// The maps' planes (30 of the image's size), kept by each calling thread between calls for
-/// images up to kScratchPixels: fresh pages cost ~20 % of a 256^2 pair without the appearance
-/// model (page faults, zeroing). Larger images use planes of their own, freed after the call.
+/// The planes of a call (XYZ, LAB2000HL and the maps': 42 of the image's size), kept by each
+/// calling thread between calls for images up to kScratchPixels: fresh pages cost ~20 % of a
+/// 256^2 pair without the appearance model (page faults, zeroing). Larger images use planes of
+/// their own, freed after the call.
 struct MapScratch {
+  XyzPlanes xyz_a, xyz_b;
+  Lab2000hlPlanes lab_a, lab_b;
   std::array<Planes, kQuantities> quantities, means;
   std::array<Planes, 8> terms;
 };
@@ -426,19 +432,20 @@ IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& tabl
                                 std::to_string(rows) +
                                 " pixels (after downsampling); at least 11x11 needed");
   }
-  XyzPlanes xa, xb;
-  if (f > 1) {
-    xa = to_xyz(box_downsample(unit_planes(a), f));
-    xb = to_xyz(box_downsample(unit_planes(b), f));
-  } else {
-    xa = to_xyz(a);
-    xb = to_xyz(b);
-  }
-  if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
-  const Lab2000hlPlanes la = to_lab2000hl(xa, table), lb = to_lab2000hl(xb, table);
   MapScratch local;
   MapScratch& m = static_cast<std::size_t>(rows) * cols <= kScratchPixels ? map_scratch() : local;
-  quantities(la, lb, m.quantities);
+  XyzPlanes &xa = m.xyz_a, &xb = m.xyz_b;
+  if (f > 1) {
+    to_xyz(box_downsample(unit_planes(a), f), xa);
+    to_xyz(box_downsample(unit_planes(b), f), xb);
+  } else {
+    to_xyz(a, xa);
+    to_xyz(b, xb);
+  }
+  if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
+  to_lab2000hl(xa, table, m.lab_a);
+  to_lab2000hl(xb, table, m.lab_b);
+  quantities(m.lab_a, m.lab_b, m.quantities);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(options.threads))
   for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], rows, cols, m.means[k]);
   return pool_maps(m.means, rows - 2 * kWindowRadius, cols - 2 * kWindowRadius, options, m.terms);
