@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <type_traits>
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
@@ -348,25 +349,107 @@ struct PrunedBlock {
   }
 };
 
+// A full block's lines move between their own contiguous storage and the lane layout in
+// 4 x 4 tiles transposed in registers (GCC vector types; the same arithmetic, element by
+// element, as the scalar loops that serve partial blocks).
+static_assert(kLanes == 4, "the tiles are kLanes x 4");
+typedef double Tile4 __attribute__((vector_size(32), aligned(8), may_alias));
+typedef long long Mask4 __attribute__((vector_size(32)));
+
+/// r[c][t] -> r[t][c].
+__attribute__((always_inline)) inline void transpose(Tile4 r[4]) {
+  const Tile4 t0 = __builtin_shuffle(r[0], r[1], Mask4{0, 4, 2, 6});
+  const Tile4 t1 = __builtin_shuffle(r[0], r[1], Mask4{1, 5, 3, 7});
+  const Tile4 t2 = __builtin_shuffle(r[2], r[3], Mask4{0, 4, 2, 6});
+  const Tile4 t3 = __builtin_shuffle(r[2], r[3], Mask4{1, 5, 3, 7});
+  r[0] = __builtin_shuffle(t0, t2, Mask4{0, 1, 4, 5});
+  r[1] = __builtin_shuffle(t1, t3, Mask4{0, 1, 4, 5});
+  r[2] = __builtin_shuffle(t0, t2, Mask4{2, 3, 6, 7});
+  r[3] = __builtin_shuffle(t1, t3, Mask4{2, 3, 6, 7});
+}
+
+/// Elements q0 .. q0 + 3 of the four lines of `lines` as four lane vectors.
+__attribute__((always_inline)) inline void load_tile(const double* const lines[kLanes], int q0,
+                                                     Tile4 r[4]) {
+  for (int c = 0; c < kLanes; ++c) r[c] = *reinterpret_cast<const Tile4*>(lines[c] + q0);
+  transpose(r);
+}
+
+/// u and v of a full block (n a multiple of 4).
+__attribute__((target_clones("avx2", "default"))) void analyse_tiles(const PaddedAxis& ax,
+                                                                     const LaneLines& x,
+                                                                     PrunedBlock& blk) {
+  const int n = ax.n;
+  for (int q0 = 0; q0 < n; q0 += 4) {
+    Tile4 xr[4], xi[4], fr[4], fi[4];  // fr[3 - t]: element n - 1 - (q0 + t)
+    load_tile(x.re, q0, xr);
+    load_tile(x.im, q0, xi);
+    load_tile(x.re, n - 4 - q0, fr);
+    load_tile(x.im, n - 4 - q0, fi);
+    for (int t = 0; t < 4; ++t) {
+      const int q = q0 + t;
+      const std::size_t e = static_cast<std::size_t>(q) * kLanes;
+      const Tile4 f_re = fr[3 - t], f_im = fi[3 - t];
+      *reinterpret_cast<Tile4*>(blk.u_io.re + e) = xr[t] + 2.0 * f_re;
+      *reinterpret_cast<Tile4*>(blk.u_io.im + e) = xi[t] + 2.0 * f_im;
+      const Tile4 dr = xr[t] - f_re, di = xi[t] - f_im;
+      *reinterpret_cast<Tile4*>(blk.v_io.re + e) = dr * ax.pre_re[q] - di * ax.pre_im[q];
+      *reinterpret_cast<Tile4*>(blk.v_io.im + e) = dr * ax.pre_im[q] + di * ax.pre_re[q];
+    }
+  }
+}
+
 /// u and v of `lanes` sequences of ax.n samples, forward transformed.
 void analyse(const PaddedAxis& ax, const LaneLines& x, int lanes, PrunedBlock& blk) {
   const int n = ax.n;
   blk.start(lanes);
-  for (int c = 0; c < lanes; ++c) {
-    const double* xr = x.re[c];
-    const double* xi = x.im[c];
-    for (int q = 0; q < n; ++q) {
-      const std::size_t e = static_cast<std::size_t>(q) * kLanes + c;
-      const double fr = xr[n - 1 - q], fi = xi[n - 1 - q];
-      blk.u_io.re[e] = xr[q] + 2.0 * fr;
-      blk.u_io.im[e] = xi[q] + 2.0 * fi;
-      const double dr = xr[q] - fr, di = xi[q] - fi;
-      blk.v_io.re[e] = dr * ax.pre_re[q] - di * ax.pre_im[q];
-      blk.v_io.im[e] = dr * ax.pre_im[q] + di * ax.pre_re[q];
+  if (lanes == kLanes && n % 4 == 0) {
+    analyse_tiles(ax, x, blk);
+  } else {
+    for (int c = 0; c < lanes; ++c) {
+      const double* xr = x.re[c];
+      const double* xi = x.im[c];
+      for (int q = 0; q < n; ++q) {
+        const std::size_t e = static_cast<std::size_t>(q) * kLanes + c;
+        const double fr = xr[n - 1 - q], fi = xi[n - 1 - q];
+        blk.u_io.re[e] = xr[q] + 2.0 * fr;
+        blk.u_io.im[e] = xi[q] + 2.0 * fi;
+        const double dr = xr[q] - fr, di = xi[q] - fi;
+        blk.v_io.re[e] = dr * ax.pre_re[q] - di * ax.pre_im[q];
+        blk.v_io.im[e] = dr * ax.pre_im[q] + di * ax.pre_re[q];
+      }
     }
   }
   ax.plan->forward(blk.u_io);
   ax.plan->forward(blk.v_io);
+}
+
+/// synthesise's combination for a full block (n a multiple of 4).
+__attribute__((target_clones("avx2", "default"))) void synthesise_tiles(const PaddedAxis& ax,
+                                                                        const PrunedBlock& blk,
+                                                                        const LaneLinesOut& out) {
+  const int n = ax.n;
+  // element p of the lane layout: a Tile4 (kLanes doubles)
+  const Tile4* i0r = reinterpret_cast<const Tile4*>(blk.u_io.re);
+  const Tile4* i0i = reinterpret_cast<const Tile4*>(blk.u_io.im);
+  const Tile4* i1r = reinterpret_cast<const Tile4*>(blk.v_io.re);
+  const Tile4* i1i = reinterpret_cast<const Tile4*>(blk.v_io.im);
+  for (int p0 = 0; p0 < n; p0 += 4) {
+    Tile4 yr[4], yi[4];
+    for (int t = 0; t < 4; ++t) {
+      const int p = p0 + t, f = n - 1 - p;
+      const double ar = ax.post1_re[p], ai = ax.post1_im[p];
+      const double br = ax.post2_re[p], bi = ax.post2_im[p];
+      yr[t] = i0r[p] / 3.0 + (i1r[p] * ar - i1i[p] * ai) + (i1r[f] * br - i1i[f] * bi);
+      yi[t] = i0i[p] / 3.0 + (i1r[p] * ai + i1i[p] * ar) + (i1r[f] * bi + i1i[f] * br);
+    }
+    transpose(yr);
+    transpose(yi);
+    for (int c = 0; c < kLanes; ++c) {
+      *reinterpret_cast<Tile4*>(out.re[c] + p0) = yr[c];
+      *reinterpret_cast<Tile4*>(out.im[c] + p0) = yi[c];
+    }
+  }
 }
 
 /// The inverse transforms of a block holding the lines 3m (u) and 3m + 1 (v), and the centre
@@ -375,6 +458,7 @@ void synthesise(const PaddedAxis& ax, PrunedBlock& blk, int lanes, const LaneLin
   const int n = ax.n;
   ax.plan->inverse(blk.u_io);
   ax.plan->inverse(blk.v_io);
+  if (lanes == kLanes && n % 4 == 0) return synthesise_tiles(ax, blk, out);
   const double* i0r = blk.u_io.re;
   const double* i0i = blk.u_io.im;
   const double* i1r = blk.v_io.re;
@@ -414,6 +498,17 @@ void filter_block(const CsfTables& h, int channel, int rows, int cols, int j0, i
   }
 }
 
+/// f(kLanes as a compile-time constant) for a full block, f(lanes) otherwise: a full block's
+/// loops over its lanes get a constant trip count (vector moves).
+template <class F>
+void with_lanes(int lanes, F&& f) {
+  if (lanes == kLanes) {
+    f(std::integral_constant<int, kLanes>{});
+  } else {
+    f(lanes);
+  }
+}
+
 /// filter_channel_pair with the pruned transforms (BatchFft supports both sides), kLanes rows or
 /// lines at a time. The row spectra's 2 cols lines (3m, then 3m + 1) are kept line by line
 /// (element j * rows + y). Lanes past the last row or line carry zeros and are not written back.
@@ -440,17 +535,19 @@ void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, 
         x.im[c] = &b[static_cast<std::size_t>(y0 + c) * cols];
       }
       analyse(*row_axis, x, lanes, row_blk);
-      for (int m = 0; m < cols; ++m) {
-        const std::size_t e = static_cast<std::size_t>(m) * kLanes;
-        double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
-        double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
-        for (int c = 0; c < lanes; ++c) {
-          ur[c] = row_blk.u_io.re[e + c];
-          ui[c] = row_blk.u_io.im[e + c];
-          vr[c] = row_blk.v_io.re[e + c];
-          vi[c] = row_blk.v_io.im[e + c];
+      with_lanes(lanes, [&](auto count) {
+        for (int m = 0; m < cols; ++m) {
+          const std::size_t e = static_cast<std::size_t>(m) * kLanes;
+          double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
+          double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
+          for (int c = 0; c < count; ++c) {
+            ur[c] = row_blk.u_io.re[e + c];
+            ui[c] = row_blk.u_io.im[e + c];
+            vr[c] = row_blk.v_io.re[e + c];
+            vi[c] = row_blk.v_io.im[e + c];
+          }
         }
-      }
+      });
     }
 #pragma omp for schedule(static)
     for (int block = 0; block < line_blocks; ++block) {
@@ -471,17 +568,19 @@ void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, 
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
       row_blk.start(lanes);
-      for (int m = 0; m < cols; ++m) {
-        const std::size_t e = static_cast<std::size_t>(m) * kLanes;
-        const double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
-        const double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
-        for (int c = 0; c < lanes; ++c) {
-          row_blk.u_io.re[e + c] = ur[c];
-          row_blk.u_io.im[e + c] = ui[c];
-          row_blk.v_io.re[e + c] = vr[c];
-          row_blk.v_io.im[e + c] = vi[c];
+      with_lanes(lanes, [&](auto count) {
+        for (int m = 0; m < cols; ++m) {
+          const std::size_t e = static_cast<std::size_t>(m) * kLanes;
+          const double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
+          const double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
+          for (int c = 0; c < count; ++c) {
+            row_blk.u_io.re[e + c] = ur[c];
+            row_blk.u_io.im[e + c] = ui[c];
+            row_blk.v_io.re[e + c] = vr[c];
+            row_blk.v_io.im[e + c] = vi[c];
+          }
         }
-      }
+      });
       LaneLinesOut out{};
       for (int c = 0; c < lanes; ++c) {
         out.re[c] = &a[static_cast<std::size_t>(y0 + c) * cols];
