@@ -498,6 +498,17 @@ void filter_block(const CsfTables& h, int channel, int rows, int cols, int j0, i
   }
 }
 
+/// The calling thread's block for lines of n samples (`which`: 0 the rows', 1 the columns'),
+/// kept between calls up to kKeptBlockSide (fresh pages cost as much as the arithmetic at 256^2).
+constexpr int kKeptBlockSide = 4096;
+PrunedBlock& pruned_block(int n, int which) {
+  static thread_local std::map<std::pair<int, int>, PrunedBlock> kept;
+  static thread_local std::unique_ptr<PrunedBlock> large[2];
+  if (n <= kKeptBlockSide) return kept.try_emplace({n, which}, n).first->second;
+  large[which] = std::make_unique<PrunedBlock>(n);
+  return *large[which];
+}
+
 /// f(kLanes as a compile-time constant) for a full block, f(lanes) otherwise: a full block's
 /// loops over its lanes get a constant trip count (vector moves).
 template <class F>
@@ -525,7 +536,7 @@ void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, 
   };
 #pragma omp parallel num_threads(thread_count(threads))
   {
-    PrunedBlock row_blk(cols), column_blk(rows);
+    PrunedBlock &row_blk = pruned_block(cols, 0), &column_blk = pruned_block(rows, 1);
 #pragma omp for schedule(static)
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
