@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -510,7 +511,7 @@ PrunedBlock& pruned_block(int n, int which) {
 }
 
 /// f(kLanes as a compile-time constant) for a full block, f(lanes) otherwise: a full block's
-/// loops over its lanes get a constant trip count (vector moves).
+/// copies get a constant size (vector moves).
 template <class F>
 void with_lanes(int lanes, F&& f) {
   if (lanes == kLanes) {
@@ -551,12 +552,11 @@ void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, 
           const std::size_t e = static_cast<std::size_t>(m) * kLanes;
           double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
           double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
-          for (int c = 0; c < count; ++c) {
-            ur[c] = row_blk.u_io.re[e + c];
-            ui[c] = row_blk.u_io.im[e + c];
-            vr[c] = row_blk.v_io.re[e + c];
-            vi[c] = row_blk.v_io.im[e + c];
-          }
+          const std::size_t bytes = sizeof(double) * count;
+          std::memcpy(ur, row_blk.u_io.re + e, bytes);
+          std::memcpy(ui, row_blk.u_io.im + e, bytes);
+          std::memcpy(vr, row_blk.v_io.re + e, bytes);
+          std::memcpy(vi, row_blk.v_io.im + e, bytes);
         }
       });
     }
@@ -584,12 +584,11 @@ void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, 
           const std::size_t e = static_cast<std::size_t>(m) * kLanes;
           const double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
           const double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
-          for (int c = 0; c < count; ++c) {
-            row_blk.u_io.re[e + c] = ur[c];
-            row_blk.u_io.im[e + c] = ui[c];
-            row_blk.v_io.re[e + c] = vr[c];
-            row_blk.v_io.im[e + c] = vi[c];
-          }
+          const std::size_t bytes = sizeof(double) * count;
+          std::memcpy(row_blk.u_io.re + e, ur, bytes);
+          std::memcpy(row_blk.u_io.im + e, ui, bytes);
+          std::memcpy(row_blk.v_io.re + e, vr, bytes);
+          std::memcpy(row_blk.v_io.im + e, vi, bytes);
         }
       });
       LaneLinesOut out{};
