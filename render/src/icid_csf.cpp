@@ -653,7 +653,11 @@ CsfScratch& csf_scratch() {
 
 }  // namespace
 
-void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
+namespace {
+
+/// csf_filter; `pruned`: the pruned transforms where BatchFft supports both sides, else the
+/// full 3n-point ones (LineFft).
+void csf_filter_with(XyzPlanes& a, XyzPlanes& b, int threads, bool pruned) {
   const int rows = a.rows, cols = a.cols;
   const auto tables = tables_for(kPadFactor * rows, kPadFactor * cols);
   CsfScratch local;
@@ -662,7 +666,7 @@ void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
   Ycc &ycc_a = scratch.ycc_a, &ycc_b = scratch.ycc_b;
   std::vector<double>&spec_re = scratch.spec_re, &spec_im = scratch.spec_im;
   const double mean_a = to_ycc(a, ycc_a), mean_b = to_ycc(b, ycc_b);
-  const bool batched = BatchFft::supported(rows) && BatchFft::supported(cols);
+  const bool batched = pruned && BatchFft::supported(rows) && BatchFft::supported(cols);
   for (int c = 0; c < 3; ++c) {
     if (batched) {
       filter_channel_pair_pruned(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads, spec_re,
@@ -673,6 +677,14 @@ void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
   }
   to_xyz(ycc_a, mean_a, a);
   to_xyz(ycc_b, mean_b, b);
+}
+
+}  // namespace
+
+void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) { csf_filter_with(a, b, threads, true); }
+
+void csf_filter_full_transforms(XyzPlanes& a, XyzPlanes& b, int threads) {
+  csf_filter_with(a, b, threads, false);
 }
 
 }  // namespace qm3d::render::icid_detail
