@@ -2,8 +2,10 @@
 // Reinhard, Khan, Akyuz & Johnson, "Color Imaging: Fundamentals and Applications" (2008) as the
 // reference (Netflix/vmaf @ f85a853, matlab/cid_icid/iCID/iCID_Metric/ColorSpaceTransformations/
 // FilterImageCSF.m) modifies them, applied in the frequency domain to the image padded
-// symmetrically to 3x its size. FFT: Eigen's unsupported FFT module (its kissfft backend,
-// BSD-3-Clause), Debian libeigen3-dev.
+// symmetrically to 3x its size. FFT: qm3d's BatchFft (icid_fft.h) on pruned transforms of the
+// padded lines (filter_channel_pair_pruned); sides with a prime factor above
+// BatchFft::kMaxRadix go through Eigen's unsupported FFT module (its kissfft backend,
+// BSD-3-Clause, Debian libeigen3-dev) on the full padded lines.
 #include "icid_csf.h"
 
 #include <omp.h>
