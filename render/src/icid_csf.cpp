@@ -278,9 +278,9 @@ struct LaneBuffers {
 //   P[3n - k] = -w^k P[k] for k != 0 mod 3 (p_q + p_(-1-q) has period n),
 // so the lines k = 3m + 2 follow from the lines k = 3m + 1. A filter even along the axis
 // (H[k] = H[3n - k], the CSFs) keeps that relation, and the centre third of the filtered
-// sequence's inverse DFT, from the inverse DFTs I0 of the lines 3m and I1 of the lines 3m + 1
-// (each of n points, scaled by 1 / n), is
-//   y_(n+p) = (I0_p + w^(-(n + p)) I1_p - w^(n + 1 + p) I1_(n-1-p)) / 3.
+// sequence's inverse DFT, from the unscaled inverse DFTs I0 of the lines 3m and I1 of the lines
+// 3m + 1 (each of n points), is
+//   y_(n+p) = (I0_p + w^(-(n + p)) I1_p - w^(n + 1 + p) I1_(n-1-p)) / 3n.
 // In two dimensions the relation holds along each axis separately (the CSF depends on
 // min(k, 3n - k) along each), so of the padded 3M x 3N spectrum only the 2M x 2N lines with
 // k, l != 2 mod 3 are transformed: n-point FFTs (in cache, radix 4) of 2/3 of the lines, about
@@ -293,14 +293,16 @@ struct PaddedAxis {
   int n = 0;
   std::shared_ptr<const BatchFft> plan;
   std::vector<double> pre_re, pre_im;      ///< w^(n + q)
-  std::vector<double> post1_re, post1_im;  ///< w^(-(n + p)) / 3
-  std::vector<double> post2_re, post2_im;  ///< -w^(n + 1 + p) / 3
+  double post0 = 0;                        ///< 1 / 3n
+  std::vector<double> post1_re, post1_im;  ///< w^(-(n + p)) / 3n
+  std::vector<double> post2_re, post2_im;  ///< -w^(n + 1 + p) / 3n
 };
 
 PaddedAxis make_padded_axis(int n) {
   PaddedAxis ax;
   ax.n = n;
   ax.plan = batch_plan(n);
+  ax.post0 = 1.0 / (3.0 * n);  // the inverse n-point DFTs come unscaled
   const long long period = 3LL * n;
   // w^e, the exponent reduced to [0, 3n) (the angle in [0, 2 pi))
   auto power = [period](long long e, double scale, std::vector<double>& re,
@@ -312,8 +314,8 @@ PaddedAxis make_padded_axis(int n) {
   };
   for (int q = 0; q < n; ++q) {
     power(n + q, 1.0, ax.pre_re, ax.pre_im);
-    power(-(n + q), 1.0 / 3, ax.post1_re, ax.post1_im);
-    power(n + 1 + q, -1.0 / 3, ax.post2_re, ax.post2_im);
+    power(-(n + q), ax.post0, ax.post1_re, ax.post1_im);
+    power(n + 1 + q, -ax.post0, ax.post2_re, ax.post2_im);
   }
   return ax;
 }
@@ -443,8 +445,8 @@ __attribute__((target_clones("avx2", "default"))) void synthesise_tiles(const Pa
       const int p = p0 + t, f = n - 1 - p;
       const double ar = ax.post1_re[p], ai = ax.post1_im[p];
       const double br = ax.post2_re[p], bi = ax.post2_im[p];
-      yr[t] = i0r[p] / 3.0 + (i1r[p] * ar - i1i[p] * ai) + (i1r[f] * br - i1i[f] * bi);
-      yi[t] = i0i[p] / 3.0 + (i1r[p] * ai + i1i[p] * ar) + (i1r[f] * bi + i1i[f] * br);
+      yr[t] = i0r[p] * ax.post0 + (i1r[p] * ar - i1i[p] * ai) + (i1r[f] * br - i1i[f] * bi);
+      yi[t] = i0i[p] * ax.post0 + (i1r[p] * ai + i1i[p] * ar) + (i1r[f] * bi + i1i[f] * br);
     }
     transpose(yr);
     transpose(yi);
@@ -459,8 +461,8 @@ __attribute__((target_clones("avx2", "default"))) void synthesise_tiles(const Pa
 /// third of the padded sequences written to `out` (the first `lanes`).
 void synthesise(const PaddedAxis& ax, PrunedBlock& blk, int lanes, const LaneLinesOut& out) {
   const int n = ax.n;
-  ax.plan->inverse(blk.u_io);
-  ax.plan->inverse(blk.v_io);
+  ax.plan->inverse_unscaled(blk.u_io);
+  ax.plan->inverse_unscaled(blk.v_io);
   if (lanes == kLanes && n % 4 == 0) return synthesise_tiles(ax, blk, out);
   const double* i0r = blk.u_io.re;
   const double* i0i = blk.u_io.im;
@@ -472,8 +474,8 @@ void synthesise(const PaddedAxis& ax, PrunedBlock& blk, int lanes, const LaneLin
       const std::size_t f = static_cast<std::size_t>(n - 1 - p) * kLanes + c;
       const double ar = ax.post1_re[p], ai = ax.post1_im[p];
       const double br = ax.post2_re[p], bi = ax.post2_im[p];
-      out.re[c][p] = i0r[e] / 3.0 + (i1r[e] * ar - i1i[e] * ai) + (i1r[f] * br - i1i[f] * bi);
-      out.im[c][p] = i0i[e] / 3.0 + (i1r[e] * ai + i1i[e] * ar) + (i1r[f] * bi + i1i[f] * br);
+      out.re[c][p] = i0r[e] * ax.post0 + (i1r[e] * ar - i1i[e] * ai) + (i1r[f] * br - i1i[f] * bi);
+      out.im[c][p] = i0i[e] * ax.post0 + (i1r[e] * ai + i1i[e] * ar) + (i1r[f] * bi + i1i[f] * br);
     }
   }
 }

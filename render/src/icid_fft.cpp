@@ -297,6 +297,13 @@ void BatchFft::forward(Buffers& b) const {
   }
 }
 
+void BatchFft::inverse_unscaled(Buffers& b) const {
+  if (run(b.im, b.re, b.work_im, b.work_re, false)) {  // see inverse
+    std::swap(b.re, b.work_re);
+    std::swap(b.im, b.work_im);
+  }
+}
+
 void BatchFft::inverse(Buffers& b, bool centre_third) const {
   // The inverse DFT is the forward one with the real and imaginary parts exchanged, on the way
   // in and out (swap(x) = i conj(x)).

@@ -46,6 +46,10 @@ class BatchFft {
   /// radix-3 stage computes only its middle output.
   void inverse(Buffers& b, bool centre_third = false) const;
 
+  /// The inverse DFT unscaled (x_j = sum_k X_k exp(2 pi i j k / n)), for callers that fold the
+  /// 1 / n into constants of their own.
+  void inverse_unscaled(Buffers& b) const;
+
  private:
   struct Stage {
     int radix = 0;
