@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -207,7 +207,8 @@ double Lab2000hlTable::lightness(double l_star) const {
   const std::size_t n = lightness_.size();
   auto grid = [](std::size_t i) { return static_cast<double>(i) * kLightnessStep; };
   if (!(l_star >= 0.0)) return lightness_.front();  // below the table (and NaN): first value
-  std::size_t pos = static_cast<std::size_t>(std::min(l_star / kLightnessStep, double(n)));
+  // a first guess (a product, not a division: the loops below settle the position)
+  std::size_t pos = static_cast<std::size_t>(std::min(l_star * (1.0 / kLightnessStep), double(n)));
   while (pos < n && grid(pos) <= l_star) ++pos;
   while (pos > 0 && grid(pos - 1) > l_star) --pos;
   if (pos >= n) return lightness_.back();  // above 100: the last value, as the references do
@@ -217,27 +218,46 @@ double Lab2000hlTable::lightness(double l_star) const {
          ((l_star - x0) / (x1 - x0)) * (lightness_[pos] - lightness_[pos - 1]);
 }
 
-double Lab2000hlTable::ab_value(const std::vector<double>& grid, double a, double b) const {
-  // Bilinear interpolation between floor(x) and floor(x) + 1, written as in both references.
-  // Coordinates outside the table (impossible for sRGB input) are clamped to its last cell.
-  const double max_lo = kAbMin + static_cast<double>(kAbSide) - 2;
-  const int x0 = static_cast<int>(std::clamp(std::floor(a), double(kAbMin), max_lo));
-  const int y0 = static_cast<int>(std::clamp(std::floor(b), double(kAbMin), max_lo));
+namespace {
+
+/// A point's bilinear cell in the (a, b) tables and its weights, shared by the a_HL and b_HL
+/// look-ups: floor(x) and floor(x) + 1, written as in both references. Coordinates outside the
+/// table (impossible for sRGB input) are clamped to its last cell.
+struct AbCell {
+  std::size_t i00, i10, i01, i11;  // (x0, y0), (x1, y0), (x0, y1), (x1, y1)
+  double x1x, y1y, xx0, yy0, norm;
+};
+
+AbCell ab_cell(double a, double b) {
+  constexpr int kMin = Lab2000hlTable::kAbMin;
+  constexpr std::size_t kSide = Lab2000hlTable::kAbSide;
+  const double max_lo = kMin + static_cast<double>(kSide) - 2;
+  const int x0 = static_cast<int>(std::clamp(std::floor(a), double(kMin), max_lo));
+  const int y0 = static_cast<int>(std::clamp(std::floor(b), double(kMin), max_lo));
   const int x1 = x0 + 1;
   const int y1 = y0 + 1;
-  auto at = [&](int x, int y) {
-    return grid[static_cast<std::size_t>(x - kAbMin) * kAbSide +
-                static_cast<std::size_t>(y - kAbMin)];
+  auto at = [](int x, int y) {
+    return static_cast<std::size_t>(x - kMin) * kSide + static_cast<std::size_t>(y - kMin);
   };
-  const double x1x = x1 - a, y1y = y1 - b, xx0 = a - x0, yy0 = b - y0;
   const double x1x0 = x1 - x0, y1y0 = y1 - y0;
-  return 1.0 / (x1x0 * y1y0) *
-         (at(x0, y0) * x1x * y1y + at(x1, y0) * xx0 * y1y + at(x0, y1) * x1x * yy0 +
-          at(x1, y1) * xx0 * yy0);
+  return {at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1),         x1 - a,
+          y1 - b,     a - x0,     b - y0,     1.0 / (x1x0 * y1y0)};
+}
+
+double ab_interpolate(const std::vector<double>& grid, const AbCell& c) {
+  return c.norm * (grid[c.i00] * c.x1x * c.y1y + grid[c.i10] * c.xx0 * c.y1y +
+                   grid[c.i01] * c.x1x * c.yy0 + grid[c.i11] * c.xx0 * c.yy0);
+}
+
+}  // namespace
+
+double Lab2000hlTable::ab_value(const std::vector<double>& grid, double a, double b) const {
+  return ab_interpolate(grid, ab_cell(a, b));
 }
 
 Lab Lab2000hlTable::from_cielab(const Lab& lab) const {
-  return Lab{lightness(lab.L), ab_value(a_hl_, lab.a, lab.b), ab_value(b_hl_, lab.a, lab.b)};
+  const AbCell cell = ab_cell(lab.a, lab.b);
+  return Lab{lightness(lab.L), ab_interpolate(a_hl_, cell), ab_interpolate(b_hl_, cell)};
 }
 
 std::filesystem::path resolve_data_dir(const std::filesystem::path& explicit_dir) {

@@ -104,11 +104,18 @@ const Eigen::Matrix3d& rgb_to_xyz() {
   return m;
 }
 
+/// The planes sized for rows x cols (kept, not cleared, when they already are).
+void resize(XyzPlanes& p, int rows, int cols) {
+  p.rows = rows;
+  p.cols = cols;
+  const std::size_t n = static_cast<std::size_t>(rows) * cols;
+  for (auto* plane : {&p.x, &p.y, &p.z}) plane->resize(n);
+}
+
 /// Linearised (srgb_to_linear: colorspace.m's threshold 0.0404482362771076) and -> XYZ.
-XyzPlanes to_xyz(const RgbPlanes& in) {
+void to_xyz(const RgbPlanes& in, XyzPlanes& out) {
   const std::size_t n = in.c[0].size();
-  XyzPlanes out{in.rows, in.cols, std::vector<double>(n), std::vector<double>(n),
-                std::vector<double>(n)};
+  resize(out, in.rows, in.cols);
   const Eigen::Matrix3d& m = rgb_to_xyz();
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d rgb(srgb_to_linear(in.c[0][i]), srgb_to_linear(in.c[1][i]),
@@ -118,7 +125,28 @@ XyzPlanes to_xyz(const RgbPlanes& in) {
     out.y[i] = xyz[1];
     out.z[i] = xyz[2];
   }
-  return out;
+}
+
+/// to_xyz of an image's 8-bit values themselves (no downsampling): each channel's
+/// srgb_to_linear(k / 255.0) taken from a table of the 256 values that very call gives, so
+/// the same bits as unit_planes then to_xyz without a call a channel.
+void to_xyz(const RgbImage& image, XyzPlanes& out) {
+  static const std::array<double, 256> linear = [] {
+    std::array<double, 256> t{};
+    for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(k / 255.0);
+    return t;
+  }();
+  const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
+  resize(out, image.height, image.width);
+  const Eigen::Matrix3d& m = rgb_to_xyz();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d rgb(linear[image.rgb[3 * i]], linear[image.rgb[3 * i + 1]],
+                              linear[image.rgb[3 * i + 2]]);
+    const Eigen::Vector3d xyz = m * rgb;
+    out.x[i] = xyz[0];
+    out.y[i] = xyz[1];
+    out.z[i] = xyz[2];
+  }
 }
 
 double lab_f(double t) {
@@ -132,22 +160,25 @@ struct Lab2000hlPlanes {
 
 /// XYZ -> CIELAB (white kWhite), clipped, -> LAB2000HL by the table (interp1 / interp2: linear
 /// and bilinear, the rules of Lab2000hlTable::from_cielab on the clipped values).
-Lab2000hlPlanes to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table) {
+void to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table, Lab2000hlPlanes& out) {
   const std::size_t n = in.x.size();
-  Lab2000hlPlanes out{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n)};
+  for (auto* plane : {&out.l, &out.a, &out.b}) plane->resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double fx = lab_f(in.x[i] / kWhite[0]);
     const double fy = lab_f(in.y[i] / kWhite[1]);
     const double fz = lab_f(in.z[i] / kWhite[2]);
-    const Lab lab{std::clamp(116.0 * fy - 16.0, 0.0, kLMax),
-                  std::clamp(500.0 * (fx - fy), -kAbLimit, kAbLimit),
-                  std::clamp(200.0 * (fy - fz), -kAbLimit, kAbLimit)};
-    const Lab hl = table.from_cielab(lab);
+    out.l[i] = std::clamp(116.0 * fy - 16.0, 0.0, kLMax);
+    out.a[i] = std::clamp(500.0 * (fx - fy), -kAbLimit, kAbLimit);
+    out.b[i] = std::clamp(200.0 * (fy - fz), -kAbLimit, kAbLimit);
+  }
+  // The look-ups in a pass of their own: the tables (1.8 MB) miss the cache, and a loop of
+  // look-ups alone keeps many misses in flight.
+  for (std::size_t i = 0; i < n; ++i) {
+    const Lab hl = table.from_cielab(Lab{out.l[i], out.a[i], out.b[i]});
     out.l[i] = hl.L;
     out.a[i] = hl.a;
     out.b[i] = hl.b;
   }
-  return out;
 }
 
 /// fspecial('gaussian', 11, 2): h(i, j) = exp(-(x^2 + y^2) / 8), x, y = -5..5, divided by
@@ -178,27 +209,43 @@ const Window& window_weights() {
 /// to the running sum. The order decides the last bits, which flat areas (variances
 /// E[x^2] - mu^2 of ~0) turn into differences of ~1e-12 in the maps; a separable filter
 /// differs there.
-/// kWindowChunk output pixels of a row are summed together in registers (the 121 steps of each
-/// pixel's sum in the order above), then stored.
+/// The output pixels of a row are summed kWindowVectors x 4 at a time in registers (the 121
+/// steps of each pixel's sum in the order above), then 4 at a time, then one by one; GCC's
+/// vector types keep the loads plain (left to itself it reversed each vector with a permute).
 /// Compiled twice, for AVX2 and for the baseline, chosen at run time: the same additions and
 /// multiplications in the same order (AVX2 without FMA), so the same bits, twice as fast.
-constexpr int kWindowChunk = 16;
+typedef double Vec4 __attribute__((vector_size(32), aligned(8), may_alias));
+constexpr int kVecWidth = 4;
+// 8 accumulators: enough independent additions to hide the adder's latency.
+constexpr int kWindowVectors = 8;
 
-/// The window sums of kWindowChunk consecutive output pixels, `in` at the first's window's
-/// bottom-right input (kernel element i = j = 0); `width` < kWindowChunk: the first `width`.
-template <bool kFull>
-__attribute__((always_inline)) inline void window_chunk(const Window& h, const double* in, int cols,
-                                                        int width, double* o) {
-  double acc[kWindowChunk] = {};
-  const int n = kFull ? kWindowChunk : width;  // a constant trip count: acc stays in registers
+/// The window sums of kVectors x 4 consecutive output pixels, `in` at the first's window's
+/// bottom-right input (kernel element i = j = 0).
+template <int kVectors>
+__attribute__((always_inline)) inline void window_vectors(const Window& h, const double* in,
+                                                          int cols, double* o) {
+  Vec4 acc[kVectors] = {};
   for (int j = 0; j < kWindowSize; ++j) {
     for (int i = 0; i < kWindowSize; ++i) {
       const double w = h[i][j];
-      const double* row = in - static_cast<std::ptrdiff_t>(i) * cols - j;
-      for (int c = 0; c < n; ++c) acc[c] += w * row[c];
+      const Vec4* row =
+          reinterpret_cast<const Vec4*>(in - static_cast<std::ptrdiff_t>(i) * cols - j);
+      for (int v = 0; v < kVectors; ++v) acc[v] += w * row[v];
     }
   }
-  for (int c = 0; c < n; ++c) o[c] = acc[c];
+  Vec4* out = reinterpret_cast<Vec4*>(o);
+  for (int v = 0; v < kVectors; ++v) out[v] = acc[v];
+}
+
+/// The same for one output pixel.
+__attribute__((always_inline)) inline double window_one(const Window& h, const double* in,
+                                                        int cols) {
+  double acc = 0;
+  for (int j = 0; j < kWindowSize; ++j) {
+    for (int i = 0; i < kWindowSize; ++i)
+      acc += h[i][j] * in[-static_cast<std::ptrdiff_t>(i) * cols - j];
+  }
+  return acc;
 }
 
 __attribute__((target_clones("avx2", "default"))) void window_mean(const std::vector<double>& q,
@@ -207,14 +254,15 @@ __attribute__((target_clones("avx2", "default"))) void window_mean(const std::ve
   const Window& h = window_weights();
   const int out_rows = rows - 2 * kWindowRadius, out_cols = cols - 2 * kWindowRadius;
   out.resize(static_cast<std::size_t>(out_rows) * out_cols);
+  constexpr int kWide = kWindowVectors * kVecWidth;
   for (int r = 0; r < out_rows; ++r) {
     double* o = &out[static_cast<std::size_t>(r) * out_cols];
     const double* in = &q[static_cast<std::size_t>(r + kWindowSize - 1) * cols + (kWindowSize - 1)];
     int c0 = 0;
-    for (; c0 + kWindowChunk <= out_cols; c0 += kWindowChunk) {
-      window_chunk<true>(h, in + c0, cols, kWindowChunk, o + c0);
-    }
-    if (c0 < out_cols) window_chunk<false>(h, in + c0, cols, out_cols - c0, o + c0);
+    for (; c0 + kWide <= out_cols; c0 += kWide)
+      window_vectors<kWindowVectors>(h, in + c0, cols, o + c0);
+    for (; c0 + kVecWidth <= out_cols; c0 += kVecWidth) window_vectors<1>(h, in + c0, cols, o + c0);
+    for (; c0 < out_cols; ++c0) o[c0] = window_one(h, in + c0, cols);
   }
 }
 
@@ -273,10 +321,13 @@ std::array<double, 7> inverse_maps(const std::array<double, kQuantities>& m,
           (c[6] + std::abs(sc12)) / (c[6] + sc1 * sc2)};
 }
 
-/// The maps' planes (30 of the image's size), kept by each calling thread between calls for
-/// images up to kScratchPixels: fresh pages cost ~20 % of a 256^2 pair without the appearance
-/// model (page faults, zeroing). Larger images use planes of their own, freed after the call.
+/// The planes of a call (XYZ, LAB2000HL and the maps': 42 of the image's size), kept by each
+/// calling thread between calls for images up to kScratchPixels: fresh pages cost ~20 % of a
+/// 256^2 pair without the appearance model (page faults, zeroing). Larger images use planes of
+/// their own, freed after the call.
 struct MapScratch {
+  XyzPlanes xyz_a, xyz_b;
+  Lab2000hlPlanes lab_a, lab_b;
   std::array<Planes, kQuantities> quantities, means;
   std::array<Planes, 8> terms;
 };
@@ -378,28 +429,30 @@ IcidResult icid(const RgbImage& a, const RgbImage& b, const Lab2000hlTable& tabl
                                 "x" + std::to_string(a.height) + " and " + std::to_string(b.width) +
                                 "x" + std::to_string(b.height) + ")");
   }
-  RgbPlanes pa = unit_planes(a), pb = unit_planes(b);
-  const int f = options.downsampling ? downsampling_factor(pa.rows, pa.cols) : 1;
-  if (f > 1) {
-    pa = box_downsample(pa, f);
-    pb = box_downsample(pb, f);
-  }
-  if (pa.rows < kWindowSize || pa.cols < kWindowSize) {
-    throw std::invalid_argument("icid: images of " + std::to_string(pa.cols) + "x" +
-                                std::to_string(pa.rows) +
+  const int f = options.downsampling ? downsampling_factor(a.height, a.width) : 1;
+  const int rows = (a.height + f - 1) / f, cols = (a.width + f - 1) / f;  // box_downsample's
+  if (rows < kWindowSize || cols < kWindowSize) {
+    throw std::invalid_argument("icid: images of " + std::to_string(cols) + "x" +
+                                std::to_string(rows) +
                                 " pixels (after downsampling); at least 11x11 needed");
   }
-  XyzPlanes xa = to_xyz(pa), xb = to_xyz(pb);
-  if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
-  const Lab2000hlPlanes la = to_lab2000hl(xa, table), lb = to_lab2000hl(xb, table);
   MapScratch local;
-  MapScratch& m =
-      static_cast<std::size_t>(pa.rows) * pa.cols <= kScratchPixels ? map_scratch() : local;
-  quantities(la, lb, m.quantities);
+  MapScratch& m = static_cast<std::size_t>(rows) * cols <= kScratchPixels ? map_scratch() : local;
+  XyzPlanes &xa = m.xyz_a, &xb = m.xyz_b;
+  if (f > 1) {
+    to_xyz(box_downsample(unit_planes(a), f), xa);
+    to_xyz(box_downsample(unit_planes(b), f), xb);
+  } else {
+    to_xyz(a, xa);
+    to_xyz(b, xb);
+  }
+  if (options.iam) icid_detail::csf_filter(xa, xb, options.threads);
+  to_lab2000hl(xa, table, m.lab_a);
+  to_lab2000hl(xb, table, m.lab_b);
+  quantities(m.lab_a, m.lab_b, m.quantities);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(thread_count(options.threads))
-  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], pa.rows, pa.cols, m.means[k]);
-  return pool_maps(m.means, pa.rows - 2 * kWindowRadius, pa.cols - 2 * kWindowRadius, options,
-                   m.terms);
+  for (int k = 0; k < kQuantities; ++k) window_mean(m.quantities[k], rows, cols, m.means[k]);
+  return pool_maps(m.means, rows - 2 * kWindowRadius, cols - 2 * kWindowRadius, options, m.terms);
 }
 
 }  // namespace qm3d::render

@@ -2,8 +2,10 @@
 // Reinhard, Khan, Akyuz & Johnson, "Color Imaging: Fundamentals and Applications" (2008) as the
 // reference (Netflix/vmaf @ f85a853, matlab/cid_icid/iCID/iCID_Metric/ColorSpaceTransformations/
 // FilterImageCSF.m) modifies them, applied in the frequency domain to the image padded
-// symmetrically to 3x its size. FFT: Eigen's unsupported FFT module (its kissfft backend,
-// BSD-3-Clause), Debian libeigen3-dev.
+// symmetrically to 3x its size. FFT: qm3d's BatchFft (icid_fft.h) on pruned transforms of the
+// padded lines (filter_channel_pair_pruned); sides with a prime factor above
+// BatchFft::kMaxRadix go through Eigen's unsupported FFT module (its kissfft backend,
+// BSD-3-Clause, Debian libeigen3-dev) on the full padded lines.
 #include "icid_csf.h"
 
 #include <omp.h>
@@ -13,9 +15,11 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <type_traits>
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
@@ -33,6 +37,7 @@ constexpr double kCyclesPerDegree = 20;
 constexpr int kPadFactor = 3;
 // Columns moved together between the row-major spectra and the column pass (whole cache lines).
 constexpr int kColumnBlock = 8;
+constexpr double kTwoPi = 6.28318530717958647692;
 
 // XYZ -> YCC (RIT), Reinhard et al. (FilterImageCSF.m M_TF); the way back solves with it.
 constexpr double kXyzToYcc[3][3] = {
@@ -265,109 +270,337 @@ struct LaneBuffers {
   BatchFft::Buffers io() { return {re.data(), im.data(), work_re.data(), work_im.data()}; }
 };
 
-/// filter_channel_pair with BatchFft (both padded lengths supported), kLanes rows or columns at
-/// a time. The spectra are kept column by column (element l * rows + y): the row passes write
-/// and read kLanes consecutive rows of a column, the column pass reads and writes its columns'
-/// `rows` elements. Lanes past the last row or column carry zeros and are not written back.
-/// The column pass's inverse computes only the centre rows M .. 2M - 1 and the last row pass
-/// only the centre columns (BatchFft::inverse's centre third).
-void filter_channel_pair_batched(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
-                                 const CsfTables& h, int channel, int threads,
-                                 std::vector<double>& spec_re, std::vector<double>& spec_im) {
+// The padded transforms, pruned. Along an axis of n samples the padded sequence is
+// p = [flip(x), x, flip(x)] (3n samples); with w = exp(-2 pi i / 3n), splitting its DFT by the
+// frequency's residue mod 3 (radix-3 decimation in frequency, p's thirds folded in):
+//   P[3m]     = DFT_n(u)[m],  u_q = x_q + 2 x_(n-1-q),
+//   P[3m + 1] = DFT_n(v)[m],  v_q = w^(n + q) (x_q - x_(n-1-q)),
+//   P[3n - k] = -w^k P[k] for k != 0 mod 3 (p_q + p_(-1-q) has period n),
+// so the lines k = 3m + 2 follow from the lines k = 3m + 1. A filter even along the axis
+// (H[k] = H[3n - k], the CSFs) keeps that relation, and the centre third of the filtered
+// sequence's inverse DFT, from the unscaled inverse DFTs I0 of the lines 3m and I1 of the lines
+// 3m + 1 (each of n points), is
+//   y_(n+p) = (I0_p + w^(-(n + p)) I1_p - w^(n + 1 + p) I1_(n-1-p)) / 3n.
+// In two dimensions the relation holds along each axis separately (the CSF depends on
+// min(k, 3n - k) along each), so of the padded 3M x 3N spectrum only the 2M x 2N lines with
+// k, l != 2 mod 3 are transformed: n-point FFTs (in cache, radix 4) of 2/3 of the lines, about
+// half the butterflies of the full 3n-point ones. The FFT's summation order is free (1e-10 of
+// the reference, whose FFTW differs from any of ours in the last bits anyway).
+
+/// The pre- and post-twiddles of the pruned transforms along an axis of n samples, and the
+/// n-point plan.
+struct PaddedAxis {
+  int n = 0;
+  std::shared_ptr<const BatchFft> plan;
+  std::vector<double> pre_re, pre_im;      ///< w^(n + q)
+  double post0 = 0;                        ///< 1 / 3n
+  std::vector<double> post1_re, post1_im;  ///< w^(-(n + p)) / 3n
+  std::vector<double> post2_re, post2_im;  ///< -w^(n + 1 + p) / 3n
+};
+
+PaddedAxis make_padded_axis(int n) {
+  PaddedAxis ax;
+  ax.n = n;
+  ax.plan = batch_plan(n);
+  ax.post0 = 1.0 / (3.0 * n);  // the inverse n-point DFTs come unscaled
+  const long long period = 3LL * n;
+  // w^e, the exponent reduced to [0, 3n) (the angle in [0, 2 pi))
+  auto power = [period](long long e, double scale, std::vector<double>& re,
+                        std::vector<double>& im) {
+    const double angle = -kTwoPi * static_cast<double>(((e % period) + period) % period) /
+                         static_cast<double>(period);
+    re.push_back(scale * std::cos(angle));
+    im.push_back(scale * std::sin(angle));
+  };
+  for (int q = 0; q < n; ++q) {
+    power(n + q, 1.0, ax.pre_re, ax.pre_im);
+    power(-(n + q), ax.post0, ax.post1_re, ax.post1_im);
+    power(n + 1 + q, -ax.post0, ax.post2_re, ax.post2_im);
+  }
+  return ax;
+}
+
+std::shared_ptr<const PaddedAxis> padded_axis(int n) {
+  static std::mutex mutex;
+  static std::map<int, std::shared_ptr<const PaddedAxis>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[n];
+  if (!slot) slot = std::make_shared<const PaddedAxis>(make_padded_axis(n));
+  return slot;
+}
+
+/// kLanes sequences, each contiguous in memory (lane c's element q at re[c][q], im[c][q]).
+struct LaneLines {
+  const double* re[kLanes];
+  const double* im[kLanes];
+};
+struct LaneLinesOut {
+  double* re[kLanes];
+  double* im[kLanes];
+};
+
+/// A block's two halves: the lines 3m (u) and 3m + 1 (v).
+struct PrunedBlock {
+  LaneBuffers u, v;
+  BatchFft::Buffers u_io{}, v_io{};
+  explicit PrunedBlock(int n) : u(n), v(n) {}
+  void start(int lanes) {
+    if (lanes < kLanes) {
+      u.clear();
+      v.clear();
+    }
+    u_io = u.io();
+    v_io = v.io();
+  }
+};
+
+// A full block's lines move between their own contiguous storage and the lane layout in
+// 4 x 4 tiles transposed in registers (GCC vector types; the same arithmetic, element by
+// element, as the scalar loops that serve partial blocks).
+static_assert(kLanes == 4, "the tiles are kLanes x 4");
+typedef double Tile4 __attribute__((vector_size(32), aligned(8), may_alias));
+typedef long long Mask4 __attribute__((vector_size(32)));
+
+/// r[c][t] -> r[t][c].
+__attribute__((always_inline)) inline void transpose(Tile4 r[4]) {
+  const Tile4 t0 = __builtin_shuffle(r[0], r[1], Mask4{0, 4, 2, 6});
+  const Tile4 t1 = __builtin_shuffle(r[0], r[1], Mask4{1, 5, 3, 7});
+  const Tile4 t2 = __builtin_shuffle(r[2], r[3], Mask4{0, 4, 2, 6});
+  const Tile4 t3 = __builtin_shuffle(r[2], r[3], Mask4{1, 5, 3, 7});
+  r[0] = __builtin_shuffle(t0, t2, Mask4{0, 1, 4, 5});
+  r[1] = __builtin_shuffle(t1, t3, Mask4{0, 1, 4, 5});
+  r[2] = __builtin_shuffle(t0, t2, Mask4{2, 3, 6, 7});
+  r[3] = __builtin_shuffle(t1, t3, Mask4{2, 3, 6, 7});
+}
+
+/// Elements q0 .. q0 + 3 of the four lines of `lines` as four lane vectors.
+__attribute__((always_inline)) inline void load_tile(const double* const lines[kLanes], int q0,
+                                                     Tile4 r[4]) {
+  for (int c = 0; c < kLanes; ++c) r[c] = *reinterpret_cast<const Tile4*>(lines[c] + q0);
+  transpose(r);
+}
+
+/// u and v of a full block (n a multiple of 4).
+__attribute__((target_clones("avx2", "default"))) void analyse_tiles(const PaddedAxis& ax,
+                                                                     const LaneLines& x,
+                                                                     PrunedBlock& blk) {
+  const int n = ax.n;
+  for (int q0 = 0; q0 < n; q0 += 4) {
+    Tile4 xr[4], xi[4], fr[4], fi[4];  // fr[3 - t]: element n - 1 - (q0 + t)
+    load_tile(x.re, q0, xr);
+    load_tile(x.im, q0, xi);
+    load_tile(x.re, n - 4 - q0, fr);
+    load_tile(x.im, n - 4 - q0, fi);
+    for (int t = 0; t < 4; ++t) {
+      const int q = q0 + t;
+      const std::size_t e = static_cast<std::size_t>(q) * kLanes;
+      const Tile4 f_re = fr[3 - t], f_im = fi[3 - t];
+      *reinterpret_cast<Tile4*>(blk.u_io.re + e) = xr[t] + 2.0 * f_re;
+      *reinterpret_cast<Tile4*>(blk.u_io.im + e) = xi[t] + 2.0 * f_im;
+      const Tile4 dr = xr[t] - f_re, di = xi[t] - f_im;
+      *reinterpret_cast<Tile4*>(blk.v_io.re + e) = dr * ax.pre_re[q] - di * ax.pre_im[q];
+      *reinterpret_cast<Tile4*>(blk.v_io.im + e) = dr * ax.pre_im[q] + di * ax.pre_re[q];
+    }
+  }
+}
+
+/// u and v of `lanes` sequences of ax.n samples, forward transformed.
+void analyse(const PaddedAxis& ax, const LaneLines& x, int lanes, PrunedBlock& blk) {
+  const int n = ax.n;
+  blk.start(lanes);
+  if (lanes == kLanes && n % 4 == 0) {
+    analyse_tiles(ax, x, blk);
+  } else {
+    for (int c = 0; c < lanes; ++c) {
+      const double* xr = x.re[c];
+      const double* xi = x.im[c];
+      for (int q = 0; q < n; ++q) {
+        const std::size_t e = static_cast<std::size_t>(q) * kLanes + c;
+        const double fr = xr[n - 1 - q], fi = xi[n - 1 - q];
+        blk.u_io.re[e] = xr[q] + 2.0 * fr;
+        blk.u_io.im[e] = xi[q] + 2.0 * fi;
+        const double dr = xr[q] - fr, di = xi[q] - fi;
+        blk.v_io.re[e] = dr * ax.pre_re[q] - di * ax.pre_im[q];
+        blk.v_io.im[e] = dr * ax.pre_im[q] + di * ax.pre_re[q];
+      }
+    }
+  }
+  ax.plan->forward(blk.u_io);
+  ax.plan->forward(blk.v_io);
+}
+
+/// synthesise's combination for a full block (n a multiple of 4).
+__attribute__((target_clones("avx2", "default"))) void synthesise_tiles(const PaddedAxis& ax,
+                                                                        const PrunedBlock& blk,
+                                                                        const LaneLinesOut& out) {
+  const int n = ax.n;
+  // element p of the lane layout: a Tile4 (kLanes doubles)
+  const Tile4* i0r = reinterpret_cast<const Tile4*>(blk.u_io.re);
+  const Tile4* i0i = reinterpret_cast<const Tile4*>(blk.u_io.im);
+  const Tile4* i1r = reinterpret_cast<const Tile4*>(blk.v_io.re);
+  const Tile4* i1i = reinterpret_cast<const Tile4*>(blk.v_io.im);
+  for (int p0 = 0; p0 < n; p0 += 4) {
+    Tile4 yr[4], yi[4];
+    for (int t = 0; t < 4; ++t) {
+      const int p = p0 + t, f = n - 1 - p;
+      const double ar = ax.post1_re[p], ai = ax.post1_im[p];
+      const double br = ax.post2_re[p], bi = ax.post2_im[p];
+      yr[t] = i0r[p] * ax.post0 + (i1r[p] * ar - i1i[p] * ai) + (i1r[f] * br - i1i[f] * bi);
+      yi[t] = i0i[p] * ax.post0 + (i1r[p] * ai + i1i[p] * ar) + (i1r[f] * bi + i1i[f] * br);
+    }
+    transpose(yr);
+    transpose(yi);
+    for (int c = 0; c < kLanes; ++c) {
+      *reinterpret_cast<Tile4*>(out.re[c] + p0) = yr[c];
+      *reinterpret_cast<Tile4*>(out.im[c] + p0) = yi[c];
+    }
+  }
+}
+
+/// The inverse transforms of a block holding the lines 3m (u) and 3m + 1 (v), and the centre
+/// third of the padded sequences written to `out` (the first `lanes`).
+void synthesise(const PaddedAxis& ax, PrunedBlock& blk, int lanes, const LaneLinesOut& out) {
+  const int n = ax.n;
+  ax.plan->inverse_unscaled(blk.u_io);
+  ax.plan->inverse_unscaled(blk.v_io);
+  if (lanes == kLanes && n % 4 == 0) return synthesise_tiles(ax, blk, out);
+  const double* i0r = blk.u_io.re;
+  const double* i0i = blk.u_io.im;
+  const double* i1r = blk.v_io.re;
+  const double* i1i = blk.v_io.im;
+  for (int c = 0; c < lanes; ++c) {
+    for (int p = 0; p < n; ++p) {
+      const std::size_t e = static_cast<std::size_t>(p) * kLanes + c;
+      const std::size_t f = static_cast<std::size_t>(n - 1 - p) * kLanes + c;
+      const double ar = ax.post1_re[p], ai = ax.post1_im[p];
+      const double br = ax.post2_re[p], bi = ax.post2_im[p];
+      out.re[c][p] = i0r[e] * ax.post0 + (i1r[e] * ar - i1i[e] * ai) + (i1r[f] * br - i1i[f] * bi);
+      out.im[c][p] = i0i[e] * ax.post0 + (i1r[e] * ai + i1i[e] * ar) + (i1r[f] * bi + i1i[f] * br);
+    }
+  }
+}
+
+/// The CSF on a column block's lines: line j of the row spectra is the padded frequency
+/// l = 3j (j < cols) or 3 (j - cols) + 1; along the column, u holds k = 3m and v k = 3m + 1.
+void filter_block(const CsfTables& h, int channel, int rows, int cols, int j0, int lanes,
+                  PrunedBlock& blk) {
   const int nr = kPadFactor * rows, nc = kPadFactor * cols;
-  const auto row_plan = batch_plan(nc), column_plan = batch_plan(nr);
-  spec_re.resize(static_cast<std::size_t>(rows) * nc);
+  const double* filter[kLanes];
+  for (int c = 0; c < kLanes; ++c) {
+    const int j = j0 + std::min(c, lanes - 1);
+    const int l = j < cols ? 3 * j : 3 * (j - cols) + 1;
+    filter[c] = h.column(channel, fold(l, nc));
+  }
+  for (int m = 0; m < rows; ++m) {
+    const int k0 = fold(3 * m, nr), k1 = fold(3 * m + 1, nr);
+    const std::size_t e = static_cast<std::size_t>(m) * kLanes;
+    for (int c = 0; c < kLanes; ++c) {
+      blk.u_io.re[e + c] *= filter[c][k0];
+      blk.u_io.im[e + c] *= filter[c][k0];
+      blk.v_io.re[e + c] *= filter[c][k1];
+      blk.v_io.im[e + c] *= filter[c][k1];
+    }
+  }
+}
+
+/// The calling thread's block for lines of n samples (`which`: 0 the rows', 1 the columns'),
+/// kept between calls up to kKeptBlockSide (fresh pages cost as much as the arithmetic at 256^2).
+constexpr int kKeptBlockSide = 4096;
+PrunedBlock& pruned_block(int n, int which) {
+  static thread_local std::map<std::pair<int, int>, PrunedBlock> kept;
+  static thread_local std::unique_ptr<PrunedBlock> large[2];
+  if (n <= kKeptBlockSide) return kept.try_emplace({n, which}, n).first->second;
+  large[which] = std::make_unique<PrunedBlock>(n);
+  return *large[which];
+}
+
+/// f(kLanes as a compile-time constant) for a full block, f(lanes) otherwise: a full block's
+/// copies get a constant size (vector moves).
+template <class F>
+void with_lanes(int lanes, F&& f) {
+  if (lanes == kLanes) {
+    f(std::integral_constant<int, kLanes>{});
+  } else {
+    f(lanes);
+  }
+}
+
+/// filter_channel_pair with the pruned transforms (BatchFft supports both sides), kLanes rows or
+/// lines at a time. The row spectra's 2 cols lines (3m, then 3m + 1) are kept line by line
+/// (element j * rows + y). Lanes past the last row or line carry zeros and are not written back.
+void filter_channel_pair_pruned(std::vector<double>& a, std::vector<double>& b, int rows, int cols,
+                                const CsfTables& h, int channel, int threads,
+                                std::vector<double>& spec_re, std::vector<double>& spec_im) {
+  const auto row_axis = padded_axis(cols), column_axis = padded_axis(rows);
+  const int lines = 2 * cols;
+  spec_re.resize(static_cast<std::size_t>(rows) * lines);
   spec_im.resize(spec_re.size());
-  const int row_blocks = (rows + kLanes - 1) / kLanes, column_blocks = (nc + kLanes - 1) / kLanes;
+  const int row_blocks = (rows + kLanes - 1) / kLanes, line_blocks = (lines + kLanes - 1) / kLanes;
+  auto at = [rows](std::vector<double>& v, int j, int y) {
+    return &v[static_cast<std::size_t>(j) * rows + y];
+  };
 #pragma omp parallel num_threads(thread_count(threads))
   {
-    LaneBuffers row_buf(nc), column_buf(nr);
+    PrunedBlock &row_blk = pruned_block(cols, 0), &column_blk = pruned_block(rows, 1);
 #pragma omp for schedule(static)
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
-      if (lanes < kLanes) row_buf.clear();
-      for (int c = 0; c < lanes; ++c) {  // pixel x lands at N + x, N - 1 - x, 3N - 1 - x
-        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
-        double* re = row_buf.re.data() + c;
-        double* im = row_buf.im.data() + c;
-        for (int x = 0; x < cols; ++x) {
-          for (const int q : {cols + x, cols - 1 - x, 3 * cols - 1 - x}) {
-            re[static_cast<std::size_t>(q) * kLanes] = a[row + x];
-            im[static_cast<std::size_t>(q) * kLanes] = b[row + x];
-          }
-        }
+      LaneLines x{};
+      for (int c = 0; c < lanes; ++c) {
+        x.re[c] = &a[static_cast<std::size_t>(y0 + c) * cols];
+        x.im[c] = &b[static_cast<std::size_t>(y0 + c) * cols];
       }
-      BatchFft::Buffers io = row_buf.io();
-      row_plan->forward(io);
-      for (int l = 0; l < nc; ++l) {
-        for (int c = 0; c < lanes; ++c) {
-          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
-          spec_re[static_cast<std::size_t>(l) * rows + y0 + c] = io.re[e];
-          spec_im[static_cast<std::size_t>(l) * rows + y0 + c] = io.im[e];
+      analyse(*row_axis, x, lanes, row_blk);
+      with_lanes(lanes, [&](auto count) {
+        for (int m = 0; m < cols; ++m) {
+          const std::size_t e = static_cast<std::size_t>(m) * kLanes;
+          double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
+          double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
+          const std::size_t bytes = sizeof(double) * count;
+          std::memcpy(ur, row_blk.u_io.re + e, bytes);
+          std::memcpy(ui, row_blk.u_io.im + e, bytes);
+          std::memcpy(vr, row_blk.v_io.re + e, bytes);
+          std::memcpy(vi, row_blk.v_io.im + e, bytes);
         }
-      }
+      });
     }
 #pragma omp for schedule(static)
-    for (int block = 0; block < column_blocks; ++block) {
-      const int l0 = block * kLanes, lanes = std::min(kLanes, nc - l0);
-      if (lanes < kLanes) column_buf.clear();
-      for (int c = 0; c < lanes; ++c) {  // row y lands at padded rows M + y, M - 1 - y, 3M - 1 - y
-        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
-        double* re = column_buf.re.data() + c;
-        double* im = column_buf.im.data() + c;
-        for (int y = 0; y < rows; ++y) {
-          const double vr = spec_re[column + y], vi = spec_im[column + y];
-          for (const int k : {rows + y, rows - 1 - y, 3 * rows - 1 - y}) {
-            re[static_cast<std::size_t>(k) * kLanes] = vr;
-            im[static_cast<std::size_t>(k) * kLanes] = vi;
-          }
-        }
-      }
-      BatchFft::Buffers io = column_buf.io();
-      column_plan->forward(io);
-      const double* filter[kLanes];
-      for (int c = 0; c < kLanes; ++c)
-        filter[c] = h.column(channel, fold(l0 + std::min(c, lanes - 1), nc));
-      for (int k = 0; k < nr; ++k) {
-        const int k_folded = fold(k, nr);
-        double* re = io.re + static_cast<std::size_t>(k) * kLanes;
-        double* im = io.im + static_cast<std::size_t>(k) * kLanes;
-        for (int c = 0; c < kLanes; ++c) {
-          re[c] *= filter[c][k_folded];
-          im[c] *= filter[c][k_folded];
-        }
-      }
-      column_plan->inverse(io, true);
+    for (int block = 0; block < line_blocks; ++block) {
+      const int j0 = block * kLanes, lanes = std::min(kLanes, lines - j0);
+      LaneLines x{};
+      LaneLinesOut out{};
       for (int c = 0; c < lanes; ++c) {
-        const std::size_t column = static_cast<std::size_t>(l0 + c) * rows;
-        for (int p = 0; p < rows; ++p) {
-          const std::size_t e = static_cast<std::size_t>(rows + p) * kLanes + c;
-          spec_re[column + p] = io.re[e];
-          spec_im[column + p] = io.im[e];
-        }
+        out.re[c] = at(spec_re, j0 + c, 0);
+        out.im[c] = at(spec_im, j0 + c, 0);
+        x.re[c] = out.re[c];
+        x.im[c] = out.im[c];
       }
+      analyse(*column_axis, x, lanes, column_blk);
+      filter_block(h, channel, rows, cols, j0, lanes, column_blk);
+      synthesise(*column_axis, column_blk, lanes, out);  // in place: the line was read
     }
 #pragma omp for schedule(static)
     for (int block = 0; block < row_blocks; ++block) {
       const int y0 = block * kLanes, lanes = std::min(kLanes, rows - y0);
-      if (lanes < kLanes) row_buf.clear();
-      for (int l = 0; l < nc; ++l) {
-        for (int c = 0; c < lanes; ++c) {
-          const std::size_t e = static_cast<std::size_t>(l) * kLanes + c;
-          row_buf.re[e] = spec_re[static_cast<std::size_t>(l) * rows + y0 + c];
-          row_buf.im[e] = spec_im[static_cast<std::size_t>(l) * rows + y0 + c];
+      row_blk.start(lanes);
+      with_lanes(lanes, [&](auto count) {
+        for (int m = 0; m < cols; ++m) {
+          const std::size_t e = static_cast<std::size_t>(m) * kLanes;
+          const double *ur = at(spec_re, m, y0), *ui = at(spec_im, m, y0);
+          const double *vr = at(spec_re, cols + m, y0), *vi = at(spec_im, cols + m, y0);
+          const std::size_t bytes = sizeof(double) * count;
+          std::memcpy(row_blk.u_io.re + e, ur, bytes);
+          std::memcpy(row_blk.u_io.im + e, ui, bytes);
+          std::memcpy(row_blk.v_io.re + e, vr, bytes);
+          std::memcpy(row_blk.v_io.im + e, vi, bytes);
         }
-      }
-      BatchFft::Buffers io = row_buf.io();
-      row_plan->inverse(io, true);
+      });
+      LaneLinesOut out{};
       for (int c = 0; c < lanes; ++c) {
-        const std::size_t row = static_cast<std::size_t>(y0 + c) * cols;
-        for (int x = 0; x < cols; ++x) {
-          const std::size_t e = static_cast<std::size_t>(cols + x) * kLanes + c;
-          a[row + x] = io.re[e];
-          b[row + x] = io.im[e];
-        }
+        out.re[c] = &a[static_cast<std::size_t>(y0 + c) * cols];
+        out.im[c] = &b[static_cast<std::size_t>(y0 + c) * cols];
       }
+      synthesise(*row_axis, row_blk, lanes, out);
     }
   }
 }
@@ -424,7 +657,11 @@ CsfScratch& csf_scratch() {
 
 }  // namespace
 
-void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
+namespace {
+
+/// csf_filter; `pruned`: the pruned transforms where BatchFft supports both sides, else the
+/// full 3n-point ones (LineFft).
+void csf_filter_with(XyzPlanes& a, XyzPlanes& b, int threads, bool pruned) {
   const int rows = a.rows, cols = a.cols;
   const auto tables = tables_for(kPadFactor * rows, kPadFactor * cols);
   CsfScratch local;
@@ -433,18 +670,25 @@ void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) {
   Ycc &ycc_a = scratch.ycc_a, &ycc_b = scratch.ycc_b;
   std::vector<double>&spec_re = scratch.spec_re, &spec_im = scratch.spec_im;
   const double mean_a = to_ycc(a, ycc_a), mean_b = to_ycc(b, ycc_b);
-  const bool batched =
-      BatchFft::supported(kPadFactor * rows) && BatchFft::supported(kPadFactor * cols);
+  const bool batched = pruned && BatchFft::supported(rows) && BatchFft::supported(cols);
   for (int c = 0; c < 3; ++c) {
     if (batched) {
-      filter_channel_pair_batched(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads, spec_re,
-                                  spec_im);
+      filter_channel_pair_pruned(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads, spec_re,
+                                 spec_im);
     } else {
       filter_channel_pair(ycc_a[c], ycc_b[c], rows, cols, *tables, c, threads);
     }
   }
   to_xyz(ycc_a, mean_a, a);
   to_xyz(ycc_b, mean_b, b);
+}
+
+}  // namespace
+
+void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads) { csf_filter_with(a, b, threads, true); }
+
+void csf_filter_full_transforms(XyzPlanes& a, XyzPlanes& b, int threads) {
+  csf_filter_with(a, b, threads, false);
 }
 
 }  // namespace qm3d::render::icid_detail

@@ -17,4 +17,8 @@ struct XyzPlanes {
 /// threads (0 = OpenMP's default): the same bits for any count.
 void csf_filter(XyzPlanes& a, XyzPlanes& b, int threads);
 
+/// csf_filter through the full 3n-point transforms of every padded line (Eigen's kissfft), not
+/// the pruned ones: the tests' check of the pruning.
+void csf_filter_full_transforms(XyzPlanes& a, XyzPlanes& b, int threads);
+
 }  // namespace qm3d::render::icid_detail

@@ -116,6 +116,71 @@ QM3D_INLINE void radix4_block(const StageIo& s, int j) {
   }
 }
 
+// 1 / sqrt(2), w_8's real part.
+constexpr double kHalfSqrt2 = 0.70710678118654752440;
+
+/// One radix-4 DFT in registers (w_4 = -i), inputs b0..b3, outputs in place.
+QM3D_INLINE void dft4(double& b0r, double& b0i, double& b1r, double& b1i, double& b2r, double& b2i,
+                      double& b3r, double& b3i) {
+  const double t0r = b0r + b2r, t0i = b0i + b2i, t1r = b0r - b2r, t1i = b0i - b2i;
+  const double t2r = b1r + b3r, t2i = b1i + b3i, t3r = b1r - b3r, t3i = b1i - b3i;
+  b0r = t0r + t2r;
+  b0i = t0i + t2i;
+  b1r = t1r + t3i;
+  b1i = t1i - t3r;
+  b2r = t0r - t2r;
+  b2i = t0i - t2i;
+  b3r = t1r - t3i;
+  b3i = t1i + t3r;
+}
+
+/// Radix 8 as two radix-4 DFTs (even and odd inputs) and a radix-2 layer with w_8^s.
+template <bool kTwiddle>
+QM3D_INLINE void radix8_block(const StageIo& s, int j) {
+  const std::size_t span = static_cast<std::size_t>(s.after) * kLanes;
+  const std::size_t in = static_cast<std::size_t>(j) * 8 * span, out = j * span;
+  const std::size_t step = static_cast<std::size_t>(s.before) * span;
+  const double* xr = s.xr + in;
+  const double* xi = s.xi + in;
+  double* yr = s.yr + out;
+  double* yi = s.yi + out;
+  double wr[8], wi[8];
+  for (int t = 1; t < 8; ++t) {
+    wr[t] = s.wr[7 * j + t - 1];
+    wi[t] = s.wi[7 * j + t - 1];
+  }
+  QM3D_LANES_INDEPENDENT
+  for (std::size_t e = 0; e < span; ++e) {
+    double ar[8], ai[8];
+    ar[0] = xr[e];
+    ai[0] = xi[e];
+    for (int t = 1; t < 8; ++t)
+      load<kTwiddle>(xr + t * span, xi + t * span, e, wr[t], wi[t], ar[t], ai[t]);
+    dft4(ar[0], ai[0], ar[2], ai[2], ar[4], ai[4], ar[6], ai[6]);  // E_0..3 in 0, 2, 4, 6
+    dft4(ar[1], ai[1], ar[3], ai[3], ar[5], ai[5], ar[7], ai[7]);  // O_0..3 in 1, 3, 5, 7
+    // w_8^s O_s: s = 1: (1 - i) / sqrt2, s = 2: -i, s = 3: (-1 - i) / sqrt2
+    const double o1r = (ar[3] + ai[3]) * kHalfSqrt2, o1i = (ai[3] - ar[3]) * kHalfSqrt2;
+    const double o2r = ai[5], o2i = -ar[5];
+    const double o3r = (ai[7] - ar[7]) * kHalfSqrt2, o3i = -(ar[7] + ai[7]) * kHalfSqrt2;
+    yr[e] = ar[0] + ar[1];
+    yi[e] = ai[0] + ai[1];
+    yr[4 * step + e] = ar[0] - ar[1];
+    yi[4 * step + e] = ai[0] - ai[1];
+    yr[step + e] = ar[2] + o1r;
+    yi[step + e] = ai[2] + o1i;
+    yr[5 * step + e] = ar[2] - o1r;
+    yi[5 * step + e] = ai[2] - o1i;
+    yr[2 * step + e] = ar[4] + o2r;
+    yi[2 * step + e] = ai[4] + o2i;
+    yr[6 * step + e] = ar[4] - o2r;
+    yi[6 * step + e] = ai[4] - o2i;
+    yr[3 * step + e] = ar[6] + o3r;
+    yi[3 * step + e] = ai[6] + o3i;
+    yr[7 * step + e] = ar[6] - o3r;
+    yi[7 * step + e] = ai[6] - o3i;
+  }
+}
+
 /// Radix 3; with kMiddleOnly only the output s = 1 (the last stage of a centre-third inverse).
 template <bool kTwiddle, bool kMiddleOnly>
 QM3D_INLINE void radix3_block(const StageIo& s, int j) {
@@ -166,6 +231,11 @@ QM3D_ICID_CLONES void radix4_stage(const StageIo& s) {
   for (int j = 1; j < s.before; ++j) radix4_block<true>(s, j);
 }
 
+QM3D_ICID_CLONES void radix8_stage(const StageIo& s) {
+  radix8_block<false>(s, 0);
+  for (int j = 1; j < s.before; ++j) radix8_block<true>(s, j);
+}
+
 QM3D_ICID_CLONES void radix3_stage(const StageIo& s, bool middle_only) {
   if (middle_only) {
     radix3_block<false, true>(s, 0);
@@ -211,7 +281,7 @@ void generic_stage(const StageIo& s, int p) {
   }
 }
 
-/// n's prime factors, 4s first (then a 2), the other odd primes, a 3 last when n has one.
+/// n's prime factors, 8s first (then a 4 or a 2), the other odd primes, a 3 last when n has one.
 std::vector<int> radices(int n) {
   std::vector<int> odd;
   int twos = 0;
@@ -225,8 +295,10 @@ std::vector<int> radices(int n) {
       }
     }
   }
-  std::vector<int> out(twos / 2, 4);
-  if (twos % 2) out.push_back(2);
+  // 8s, then a 4 or a 2 for what is left: 256 = 8 x 8 x 4 (three passes, not four)
+  std::vector<int> out(twos / 3, 8);
+  if (twos % 3 == 2) out.push_back(4);
+  if (twos % 3 == 1) out.push_back(2);
   // the 3 (there is one when odd[0] == 3) moves to the end: odd is sorted, so it is the first
   if (!odd.empty() && odd.front() == 3) {
     out.insert(out.end(), odd.begin() + 1, odd.end());
@@ -275,7 +347,9 @@ bool BatchFft::run(double* xr, double* xi, double* yr, double* yi, bool centre_t
     const StageIo s{
         xr, xi, yr, yi, st.before, st.after, st.twiddle_re.data(), st.twiddle_im.data()};
     const bool last = k + 1 == stages_.size();
-    if (st.radix == 4) {
+    if (st.radix == 8) {
+      radix8_stage(s);
+    } else if (st.radix == 4) {
       radix4_stage(s);
     } else if (st.radix == 2) {
       radix2_stage(s);
@@ -292,6 +366,13 @@ bool BatchFft::run(double* xr, double* xi, double* yr, double* yi, bool centre_t
 
 void BatchFft::forward(Buffers& b) const {
   if (run(b.re, b.im, b.work_re, b.work_im, false)) {
+    std::swap(b.re, b.work_re);
+    std::swap(b.im, b.work_im);
+  }
+}
+
+void BatchFft::inverse_unscaled(Buffers& b) const {
+  if (run(b.im, b.re, b.work_im, b.work_re, false)) {  // see inverse
     std::swap(b.re, b.work_re);
     std::swap(b.im, b.work_im);
   }

@@ -9,7 +9,7 @@ namespace qm3d::render::icid_detail {
 /// The DFT of length n of kLanes sequences together, in split layout: element k of sequence
 /// (lane) c at re[k * kLanes + c], im[k * kLanes + c]. Mixed-radix Stockham (self-sorting,
 /// decimation in time; Van Loan, "Computational Frameworks for the FFT", 1992, 1.7) with
-/// radix-4, -2 and -3 butterflies and a generic odd-prime one, twiddles precomputed. Every lane
+/// radix-8, -4, -2 and -3 butterflies and a generic odd-prime one, twiddles precomputed. Every lane
 /// gets the same operations in the same order, so the innermost loops over the lanes vectorise
 /// (SSE2, and AVX2 without FMA through target_clones: the same bits on any CPU) and a lane's
 /// result does not depend on its neighbours or on the thread. The plan is immutable (share it);
@@ -45,6 +45,10 @@ class BatchFft {
   /// by 3) only the outputs n/3 .. 2n/3 - 1 are computed (the rest is left undefined): the last
   /// radix-3 stage computes only its middle output.
   void inverse(Buffers& b, bool centre_third = false) const;
+
+  /// The inverse DFT unscaled (x_j = sum_k X_k exp(2 pi i j k / n)), for callers that fold the
+  /// 1 / n into constants of their own.
+  void inverse_unscaled(Buffers& b) const;
 
  private:
   struct Stage {

@@ -1,14 +1,19 @@
 // BatchFft (render/src/icid_fft.h), the FFT of iCID's CSF filtering: forward transforms against
 // a direct DFT in long double, inverse(forward(x)) = x, the centre-third inverse equal to the
-// full one there, and every lane independent of the others.
+// full one there, and every lane independent of the others; the CSF filtering's pruned
+// transforms (render/src/icid_csf.h) against the full 3n-point ones.
 #include "icid_fft.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <random>
+#include <utility>
 #include <vector>
+
+#include "icid_csf.h"
 
 namespace qm3d::render::icid_detail {
 namespace {
@@ -122,6 +127,44 @@ TEST(IcidFft, LanesAreIndependent) {
   }
   EXPECT_FALSE(BatchFft::supported(17 * 3));
   EXPECT_FALSE(BatchFft::supported(0));
+}
+
+XyzPlanes random_planes(int rows, int cols, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  XyzPlanes p{rows, cols, {}, {}, {}};
+  for (auto* plane : {&p.x, &p.y, &p.z}) {
+    plane->resize(static_cast<std::size_t>(rows) * cols);
+    for (double& v : *plane) v = u(rng);
+  }
+  return p;
+}
+
+// The pruned transforms (the lines k, l = 2 mod 3 left out, n-point FFTs) give the filtering
+// of the full 3n-point ones to rounding: sides that are multiples of 4 (the 4 x 4 tiles), other
+// sides and partial lane blocks (the scalar loops), on one and two threads.
+TEST(IcidFft, PrunedCsfEqualsFullTransforms) {
+  const int sizes[][2] = {{64, 40}, {16, 15}, {26, 30}, {45, 98}, {126, 150}};
+  for (const auto& size : sizes) {
+    for (const int threads : {1, 2}) {
+      XyzPlanes a = random_planes(size[0], size[1], 3), b = random_planes(size[0], size[1], 4);
+      XyzPlanes fa = a, fb = b;
+      csf_filter(a, b, threads);
+      csf_filter_full_transforms(fa, fb, threads);
+      double worst = 0;
+      for (const auto& [got, want] : {std::pair{&a.x, &fa.x},
+                                      {&a.y, &fa.y},
+                                      {&a.z, &fa.z},
+                                      {&b.x, &fb.x},
+                                      {&b.y, &fb.y},
+                                      {&b.z, &fb.z}}) {
+        for (std::size_t i = 0; i < got->size(); ++i)
+          worst = std::max(worst, std::abs((*got)[i] - (*want)[i]));
+      }
+      EXPECT_LT(worst, 1e-13) << size[0] << "x" << size[1] << ", " << threads << " threads";
+      EXPECT_GT(std::abs(a.y[0] - random_planes(size[0], size[1], 3).y[0]), 1e-6);  // filtered
+    }
+  }
 }
 
 }  // namespace
