@@ -151,13 +151,11 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
                [&](std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
                  Vec3 vec = edge;
                  double t;
-                 const bool isect =
-                     sphere_clip_vector_cmdm(o, walk.radius, m.positions[v], vec, t);
+                 const bool isect = sphere_clip_vector_cmdm(o, walk.radius, m.positions[v], vec, t);
                  if (!isect && !scratch.enter(w)) return;  // inside and already sampled
-                 // |edge| only for crossings (a zero-length edge gives the vertex sample).
-                 const Sample s = (isect && dot(edge, edge) != 0)
-                                      ? crossing_sample(f, v, w, vec, t)
-                                      : vertex_sample(f, w);
+                 // A zero-length crossing edge gives the vertex sample.
+                 const Sample s = (isect && dot(edge, edge) != 0) ? crossing_sample(f, v, w, vec, t)
+                                                                  : vertex_sample(f, w);
                  push_sample(s, o, q0, with_color, out);
                });
   to_weights(out, walk.sigma);
@@ -186,8 +184,8 @@ void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32
         }
         // A crossing: a sample at this level only (a zero-length edge gives w's vertex sample).
         const MatchedFields& here = levels[level];
-        const Sample s = dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, t)
-                                              : vertex_sample(here, w);
+        const Sample s =
+            dot(edge, edge) != 0 ? crossing_sample(here, v, w, vec, t) : vertex_sample(here, w);
         push_sample(s, o, q0, with_color, out[level]);
         return true;
       },
