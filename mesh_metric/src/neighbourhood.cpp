@@ -59,12 +59,20 @@ Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
   return s;
 }
 
-// w1 and w2 hold the samples' distances until the walk is done; to_weights turns them into the
-// Gaussian weights of one level in a vectorised pass.
+// The squared distance |a - b|^2.
+double squared_distance(const Vec3& a, const Vec3& b) {
+  const Vec3 d = sub(a, b);
+  return dot(d, d);
+}
+
+// w1 and w2 hold the samples' squared distances until the walk is done; to_weights turns them
+// into the Gaussian weights of one level in a vectorised pass. MEPP2 takes the distance's square
+// root and squares it again in the weight: the same number to rounding, without a square root
+// per sample and side (scores within 1e-13 relative).
 void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, bool with_color,
                  NeighbourhoodSamples& out) {
-  out.w1.push_back(distance(s.point1, center1));
-  out.w2.push_back(distance(s.point2, center2));
+  out.w1.push_back(squared_distance(s.point1, center1));
+  out.w2.push_back(squared_distance(s.point2, center2));
   out.curv1.push_back(s.curv1);
   out.curv2.push_back(s.curv2);
   if (!with_color) return;
@@ -82,8 +90,8 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
                         std::uint32_t w, const Vec3& center1, const Vec3& center2, bool with_color,
                         std::vector<NeighbourhoodSamples>& out) {
   const MatchedFields& f = levels.front();
-  const double d1 = distance(f.mesh->positions[w], center1);
-  const double d2 = distance((*f.matched_point)[w], center2);
+  const double d1 = squared_distance(f.mesh->positions[w], center1);
+  const double d2 = squared_distance((*f.matched_point)[w], center2);
   Lab c1, c2;
   double chroma1 = 0, chroma2 = 0, hue = 0;
   if (with_color) {
@@ -109,8 +117,8 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
 }
 
 void to_weights(NeighbourhoodSamples& out, double sigma) {
-  gaussian_weights_in_place(out.w1.data(), out.w1.size(), sigma);
-  gaussian_weights_in_place(out.w2.data(), out.w2.size(), sigma);
+  gaussian_weights_from_squares_in_place(out.w1.data(), out.w1.size(), sigma);
+  gaussian_weights_from_squares_in_place(out.w2.data(), out.w2.size(), sigma);
 }
 
 }  // namespace
