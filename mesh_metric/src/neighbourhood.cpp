@@ -1,5 +1,9 @@
 #include "neighbourhood.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <cmath>
 
 #include "qm3d/common/statistics.h"
@@ -65,6 +69,49 @@ double squared_distance(const Vec3& a, const Vec3& b) {
   return dot(d, d);
 }
 
+// The colour terms of a sample before their square roots: chroma(c)^2 = a^2 + b^2 on each side
+// and hue_difference's (a1 - a2)^2 + (b1 - b2)^2, each written as chroma and hue_difference
+// write it. finish_colours takes the roots once the walk is done, two samples at a time.
+struct ColourSquares {
+  double chroma1 = 0, chroma2 = 0, hue = 0;
+};
+
+ColourSquares colour_squares(const Lab& c1, const Lab& c2) {
+  return {c1.a * c1.a + c1.b * c1.b, c2.a * c2.a + c2.b * c2.b,
+          std::pow(c1.a - c2.a, 2) + std::pow(c1.b - c2.b, 2)};
+}
+
+// chroma1 = sqrt(chroma1), chroma2 = sqrt(chroma2) and hue_diff = sqrt(hue_diff - (chroma1 -
+// chroma2)^2), or 0 where that is negative: chroma() and hue_difference() operation for
+// operation (IEEE square roots, differences and products round the same in SSE2's two lanes as
+// in scalar code), for the samples' colour terms left by colour_squares.
+void finish_colours(NeighbourhoodSamples& out) {
+  const std::size_t n = out.chroma1.size();
+  double *c1 = out.chroma1.data(), *c2 = out.chroma2.data(), *h = out.hue_diff.data();
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  const __m128d zero = _mm_setzero_pd();
+  for (; i + 2 <= n; i += 2) {
+    const __m128d r1 = _mm_sqrt_pd(_mm_loadu_pd(c1 + i));
+    const __m128d r2 = _mm_sqrt_pd(_mm_loadu_pd(c2 + i));
+    const __m128d dc = _mm_sub_pd(r1, r2);
+    const __m128d dh2 = _mm_sub_pd(_mm_loadu_pd(h + i), _mm_mul_pd(dc, dc));
+    // dh2 < 0 ? 0 : sqrt(dh2): the root where "not less than 0" holds, else +0.
+    const __m128d root = _mm_and_pd(_mm_cmpnlt_pd(dh2, zero), _mm_sqrt_pd(dh2));
+    _mm_storeu_pd(c1 + i, r1);
+    _mm_storeu_pd(c2 + i, r2);
+    _mm_storeu_pd(h + i, root);
+  }
+#endif
+  for (; i < n; ++i) {
+    c1[i] = std::sqrt(c1[i]);
+    c2[i] = std::sqrt(c2[i]);
+    const double dc = c1[i] - c2[i];
+    const double dh2 = h[i] - std::pow(dc, 2);
+    h[i] = dh2 < 0 ? 0.0 : std::sqrt(dh2);
+  }
+}
+
 // w1 and w2 hold the samples' squared distances until the walk is done; to_weights turns them
 // into the Gaussian weights of one level in a vectorised pass. MEPP2 takes the distance's square
 // root and squares it again in the weight: the same number to rounding, without a square root
@@ -78,14 +125,14 @@ void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, bool
   if (!with_color) return;
   out.light1.push_back(s.color1.L);
   out.light2.push_back(s.color2.L);
-  const double chroma1 = chroma(s.color1), chroma2 = chroma(s.color2);
-  out.chroma1.push_back(chroma1);
-  out.chroma2.push_back(chroma2);
-  out.hue_diff.push_back(hue_difference(s.color1, s.color2, chroma1, chroma2));
+  const ColourSquares c = colour_squares(s.color1, s.color2);
+  out.chroma1.push_back(c.chroma1);
+  out.chroma2.push_back(c.chroma2);
+  out.hue_diff.push_back(c.hue);
 }
 
-// A vertex sample at several levels: the distances, colours, chroma and hue difference do not
-// depend on the level, so they are computed once (the same operations as push_sample).
+// A vertex sample at several levels: the distances, colours and the colour terms do not depend
+// on the level, so they are computed once (the same operations as push_sample).
 void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t first,
                         std::uint32_t w, const Vec3& center1, const Vec3& center2, bool with_color,
                         std::vector<NeighbourhoodSamples>& out) {
@@ -93,13 +140,11 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
   const double d1 = squared_distance(f.mesh->positions[w], center1);
   const double d2 = squared_distance((*f.matched_point)[w], center2);
   Lab c1, c2;
-  double chroma1 = 0, chroma2 = 0, hue = 0;
+  ColourSquares squares;
   if (with_color) {
     c1 = (*f.color)[w];
     c2 = (*f.color_match)[w];
-    chroma1 = chroma(c1);
-    chroma2 = chroma(c2);
-    hue = hue_difference(c1, c2, chroma1, chroma2);
+    squares = colour_squares(c1, c2);
   }
   for (std::size_t j = first; j < levels.size(); ++j) {
     NeighbourhoodSamples& o = out[j];
@@ -110,13 +155,14 @@ void push_vertex_levels(const std::vector<MatchedFields>& levels, std::size_t fi
     if (!with_color) continue;
     o.light1.push_back(c1.L);
     o.light2.push_back(c2.L);
-    o.chroma1.push_back(chroma1);
-    o.chroma2.push_back(chroma2);
-    o.hue_diff.push_back(hue);
+    o.chroma1.push_back(squares.chroma1);
+    o.chroma2.push_back(squares.chroma2);
+    o.hue_diff.push_back(squares.hue);
   }
 }
 
 void to_weights(NeighbourhoodSamples& out, double sigma) {
+  finish_colours(out);
   gaussian_weights_from_squares_in_place(out.w1.data(), out.w1.size(), sigma);
   gaussian_weights_from_squares_in_place(out.w2.data(), out.w2.size(), sigma);
 }
