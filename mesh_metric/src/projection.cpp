@@ -208,8 +208,13 @@ std::array<double, 9> corners_of(const HalfedgeMesh& m, std::uint32_t f) {
 
 // The size of the largest set of faces with one geometry, bounded above by the largest set with
 // one hash of it (equal geometries hash alike): the exact count is needed only past the bound.
-std::size_t largest_hash_run(const HalfedgeMesh& m) {
+// That in turn is bounded by the largest set with the same low 16 bits of the hash, counted in
+// one pass; the hashes are sorted only when that bound does not settle it (repeated faces).
+std::size_t largest_hash_run(const HalfedgeMesh& m, std::size_t enough) {
   std::vector<std::uint64_t> hashes(m.triangles.size());
+  constexpr std::size_t kBuckets = 1u << 16;
+  std::vector<std::uint32_t> bucket(kBuckets, 0);
+  std::size_t largest = 0;
   for (std::uint32_t f = 0; f < hashes.size(); ++f) {
     std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the coordinates' bits
     for (double x : corners_of(m, f)) {
@@ -219,9 +224,11 @@ std::size_t largest_hash_run(const HalfedgeMesh& m) {
       h = (h ^ bits) * 1099511628211ull;
     }
     hashes[f] = h;
+    largest = std::max<std::size_t>(largest, ++bucket[h & (kBuckets - 1)]);
   }
+  if (largest <= enough) return largest;
   std::sort(hashes.begin(), hashes.end());
-  std::size_t largest = 0;
+  largest = 0;
   for (std::size_t i = 0, run = 0; i < hashes.size(); ++i) {
     run = i > 0 && hashes[i] == hashes[i - 1] ? run + 1 : 1;
     largest = std::max(largest, run);
@@ -231,7 +238,7 @@ std::size_t largest_hash_run(const HalfedgeMesh& m) {
 
 TreeFaces tree_faces(const HalfedgeMesh& m) {
   TreeFaces out;
-  if (largest_hash_run(m) <= kMaxRepeatedFaces) return out;
+  if (largest_hash_run(m, kMaxRepeatedFaces) <= kMaxRepeatedFaces) return out;
   std::vector<std::uint32_t> order(m.triangles.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
