@@ -19,29 +19,38 @@ namespace qm3d {
 namespace {
 
 #if defined(QM3D_HAVE_LIBMVEC_AVX2)
-// Four weights: -(d * d) / 2.0 / sigma / sigma and the scale times exp, operation for operation
-// as gaussian_weight writes them (IEEE vector operations round like scalar ones).
-__attribute__((target("avx2"))) inline __m256d four_weights(__m256d d, __m256d sigma,
-                                                            __m256d scale) {
+// Four weights from squared distances s: -s / 2.0 / sigma / sigma and the scale times exp,
+// operation for operation as gaussian_weight writes them (IEEE vector operations round like
+// scalar ones).
+__attribute__((target("avx2"))) inline __m256d four_weights_from_squares(__m256d s, __m256d sigma,
+                                                                         __m256d scale) {
   const __m256d sign = _mm256_set1_pd(-0.0);
-  __m256d e = _mm256_xor_pd(_mm256_mul_pd(d, d), sign);
+  __m256d e = _mm256_xor_pd(s, sign);
   e = _mm256_div_pd(_mm256_div_pd(_mm256_div_pd(e, _mm256_set1_pd(2.0)), sigma), sigma);
   return _mm256_mul_pd(scale, _ZGVdN4v_exp(e));
 }
 
+// Four weights from distances d: s = d * d, then as above.
+__attribute__((target("avx2"))) inline __m256d four_weights(__m256d d, __m256d sigma,
+                                                            __m256d scale) {
+  return four_weights_from_squares(_mm256_mul_pd(d, d), sigma, scale);
+}
+
+template <bool kSquares>
 __attribute__((target("avx2"))) void weights_avx2(double* values, std::size_t n, double sigma) {
   const __m256d s = _mm256_set1_pd(sigma);
   const __m256d scale = _mm256_set1_pd(gaussian_weight_scale(sigma));
+  const auto four = [&](__m256d x) __attribute__((target("avx2"))) {
+    return kSquares ? four_weights_from_squares(x, s, scale) : four_weights(x, s, scale);
+  };
   std::size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    _mm256_storeu_pd(values + i, four_weights(_mm256_loadu_pd(values + i), s, scale));
-  }
+  for (; i + 4 <= n; i += 4) _mm256_storeu_pd(values + i, four(_mm256_loadu_pd(values + i)));
   if (i == n) return;
   // The tail through the same lanes, so that an element's weight does not depend on where it
   // stands (the walk tests compare samples gathered in different orders bit for bit).
   double tail[4] = {0, 0, 0, 0};
   for (std::size_t k = i; k < n; ++k) tail[k - i] = values[k];
-  _mm256_storeu_pd(tail, four_weights(_mm256_loadu_pd(tail), s, scale));
+  _mm256_storeu_pd(tail, four(_mm256_loadu_pd(tail)));
   for (std::size_t k = i; k < n; ++k) values[k] = tail[k - i];
 }
 #endif
@@ -51,11 +60,23 @@ __attribute__((target("avx2"))) void weights_avx2(double* values, std::size_t n,
 void gaussian_weights_in_place(double* values, std::size_t n, double sigma) {
 #if defined(QM3D_HAVE_LIBMVEC_AVX2)
   if (cpu_has_avx2()) {
-    weights_avx2(values, n, sigma);
+    weights_avx2<false>(values, n, sigma);
     return;
   }
 #endif
   for (std::size_t i = 0; i < n; ++i) values[i] = gaussian_weight(values[i], sigma);
+}
+
+void gaussian_weights_from_squares_in_place(double* values, std::size_t n, double sigma) {
+#if defined(QM3D_HAVE_LIBMVEC_AVX2)
+  if (cpu_has_avx2()) {
+    weights_avx2<true>(values, n, sigma);
+    return;
+  }
+#endif
+  const double scale = gaussian_weight_scale(sigma);
+  for (std::size_t i = 0; i < n; ++i)
+    values[i] = scale * std::exp(-values[i] / 2.0 / sigma / sigma);
 }
 
 }  // namespace qm3d

@@ -32,6 +32,8 @@ struct WalkParameters {
 /// MEPP2's sphere_clip_vector_cmdm (cmdm.h): like sphere_clip_vector but a = 0, delta < 0 and
 /// t < 0 all mean "crossing, unclipped", and t < 1e-16 becomes t = 0.01.
 bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v);
+/// The same, also giving the clip parameter t (v becomes t v; t = 1 when v is not clipped).
+bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v, double& t);
 
 /// Fills `out` with the samples of vertex v0's neighbourhood: v0 itself, every vertex reached
 /// inside the ball (once), and one interpolated point per edge crossing the sphere, each paired

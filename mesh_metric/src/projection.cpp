@@ -48,6 +48,22 @@ std::array<double, 3> heron_areas(const HalfedgeMesh& mesh, std::uint32_t face, 
 // distinct points make it.
 constexpr std::size_t kMaxCoincidentHints = 1024;
 
+// FNV-1a over the bits of coordinates, -0 taken as +0 (equal coordinates hash alike).
+std::uint64_t hash_coordinates(std::uint64_t h, double x) {
+  std::uint64_t bits;
+  x = x == 0 ? 0.0 : x;
+  std::memcpy(&bits, &x, sizeof bits);
+  return (h ^ bits) * 1099511628211ull;
+}
+
+constexpr std::uint64_t kHashSeed = 1469598103934665603ull;
+
+std::uint64_t position_hash(const Vec3& p) {
+  std::uint64_t h = kHashSeed;
+  for (double x : p) h = hash_coordinates(h, x);
+  return h;
+}
+
 // Groups of hints at equal positions. Hints are given as vertices (key[e] for hint e); for each
 // hint, the group it is in, whether it is its group's first, and the size of the largest group.
 class CoincidentHints {
@@ -78,17 +94,28 @@ class CoincidentHints {
  private:
   static constexpr std::uint32_t kNone = 0xffffffffu;
 
-  // For each vertex, the smallest index of a vertex at the same position.
+  // For each vertex, the smallest index of a vertex at the same position. Equal positions hash
+  // alike, so a vertex alone in its hash bucket is alone at its position: only the others are
+  // sorted by position (then index) to find their groups.
   static std::vector<std::uint32_t> first_coincident(const ArrayView<Vec3>& positions) {
-    std::vector<std::uint32_t> order(positions.size());
-    std::iota(order.begin(), order.end(), 0u);
+    std::vector<std::uint32_t> first(positions.size());
+    std::iota(first.begin(), first.end(), 0u);
+    std::size_t buckets = 1;
+    while (buckets < 2 * positions.size()) buckets <<= 1;
+    const auto bucket_of = [&](std::uint32_t v) {
+      return position_hash(positions[v]) & (buckets - 1);
+    };
+    std::vector<std::uint32_t> count(buckets, 0);
+    for (std::uint32_t v = 0; v < positions.size(); ++v) ++count[bucket_of(v)];
+    std::vector<std::uint32_t> order;
+    for (std::uint32_t v = 0; v < positions.size(); ++v) {
+      if (count[bucket_of(v)] > 1) order.push_back(v);
+    }
     std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
       return positions[a] < positions[b] || (positions[a] == positions[b] && a < b);
     });
-    std::vector<std::uint32_t> first(positions.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      const bool starts = i == 0 || !(positions[order[i - 1]] == positions[order[i]]);
-      first[order[i]] = starts ? order[i] : first[order[i - 1]];
+    for (std::size_t i = 1; i < order.size(); ++i) {
+      if (positions[order[i - 1]] == positions[order[i]]) first[order[i]] = first[order[i - 1]];
     }
     return first;
   }
@@ -208,20 +235,22 @@ std::array<double, 9> corners_of(const HalfedgeMesh& m, std::uint32_t f) {
 
 // The size of the largest set of faces with one geometry, bounded above by the largest set with
 // one hash of it (equal geometries hash alike): the exact count is needed only past the bound.
-std::size_t largest_hash_run(const HalfedgeMesh& m) {
+// That in turn is bounded by the largest set with the same low 16 bits of the hash, counted in
+// one pass; the hashes are sorted only when that bound does not settle it (repeated faces).
+std::size_t largest_hash_run(const HalfedgeMesh& m, std::size_t enough) {
   std::vector<std::uint64_t> hashes(m.triangles.size());
-  for (std::uint32_t f = 0; f < hashes.size(); ++f) {
-    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the coordinates' bits
-    for (double x : corners_of(m, f)) {
-      std::uint64_t bits;
-      x = x == 0 ? 0.0 : x;  // -0 and +0 are the same coordinate
-      std::memcpy(&bits, &x, sizeof bits);
-      h = (h ^ bits) * 1099511628211ull;
-    }
-    hashes[f] = h;
-  }
-  std::sort(hashes.begin(), hashes.end());
+  constexpr std::size_t kBuckets = 1u << 16;
+  std::vector<std::uint32_t> bucket(kBuckets, 0);
   std::size_t largest = 0;
+  for (std::uint32_t f = 0; f < hashes.size(); ++f) {
+    std::uint64_t h = kHashSeed;
+    for (double x : corners_of(m, f)) h = hash_coordinates(h, x);
+    hashes[f] = h;
+    largest = std::max<std::size_t>(largest, ++bucket[h & (kBuckets - 1)]);
+  }
+  if (largest <= enough) return largest;
+  std::sort(hashes.begin(), hashes.end());
+  largest = 0;
   for (std::size_t i = 0, run = 0; i < hashes.size(); ++i) {
     run = i > 0 && hashes[i] == hashes[i - 1] ? run + 1 : 1;
     largest = std::max(largest, run);
@@ -231,7 +260,7 @@ std::size_t largest_hash_run(const HalfedgeMesh& m) {
 
 TreeFaces tree_faces(const HalfedgeMesh& m) {
   TreeFaces out;
-  if (largest_hash_run(m) <= kMaxRepeatedFaces) return out;
+  if (largest_hash_run(m, kMaxRepeatedFaces) <= kMaxRepeatedFaces) return out;
   std::vector<std::uint32_t> order(m.triangles.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {

@@ -30,6 +30,12 @@ inline double gaussian_weight(double distance, double sigma) {
 /// Elsewhere (no AVX2, no libmvec) it is std::exp, and gaussian_weight's value exactly.
 void gaussian_weights_in_place(double* values, std::size_t n, double sigma);
 
+/// The same from squared distances: values[i] = s holds d^2 on entry and becomes the weight with
+/// the exponent -s / 2.0 / sigma / sigma. A caller that has |x|^2 saves the square root d and
+/// its square d * d, which give back |x|^2 only to rounding (so the weight may differ from
+/// gaussian_weight(sqrt(s), sigma) in its last bits).
+void gaussian_weights_from_squares_in_place(double* values, std::size_t n, double sigma);
+
 /// Which weights the cross term sigma_12 uses, and how it is normalised.
 enum class CovarianceWeighting {
   kFirst,  ///< sum w1 (x1 - mu1)(x2 - mu2) / sum w1   (CMDM, PCQM)
