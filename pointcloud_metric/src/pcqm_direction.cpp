@@ -573,7 +573,9 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
     if (count > kUnderdeterminedShare * double(iterated_tree.size())) too_common |= kind;
   }
   if (too_common != 0) out.suggestion = suggest_settings(clouds, p, too_common);
-  for (FeatureVector& f : out.features) similarities_to_features(f);
+  const auto n = static_cast<std::int64_t>(out.features.size());
+#pragma omp parallel for num_threads(thread_count(p.threads))
+  for (std::int64_t i = 0; i < n; ++i) similarities_to_features(out.features[std::size_t(i)]);
   if (p.diagnostics) {
     out.diagnostics = diagnostics_of(data, iterated_tree);
     out.diagnostics.count_statistics = std::move(counts);
