@@ -59,12 +59,12 @@ FeatureVector curvature_features_of(const PairedMoments& m, const FeatureConvent
   return f;
 }
 
-// s4..s8 into `sim` from the lightness moments and the weighted means of chroma and hue.
-void color_similarities_of(const NeighbourhoodSamples& s, const FeatureConventions& conv,
-                           const PairedMoments& light, double chroma_mean1, double chroma_mean2,
-                           double hue_mean, FeatureVector& sim) {
-  const PairedMoments structure =
-      conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light;
+// s4..s8 into `sim` from the lightness moments, those of the structure term (the unweighted
+// ones under unweighted_lightness_structure, else `light`) and the weighted means of chroma and
+// hue.
+void color_similarities_of(const PairedMoments& light, const PairedMoments& structure,
+                           double chroma_mean1, double chroma_mean2, double hue_mean,
+                           FeatureVector& sim) {
   sim[3] = lightness_similarity(light.mean1, light.mean2);
   sim[4] = lightness_contrast_similarity(light.sd1, light.sd2);
   sim[5] = lightness_structure_similarity(structure.sd1, structure.sd2, structure.cov12);
@@ -81,10 +81,12 @@ FeatureVector curvature_features(const NeighbourhoodSamples& s, const FeatureCon
 
 FeatureVector color_similarities(const NeighbourhoodSamples& s, const FeatureConventions& conv) {
   FeatureVector sim{};
-  color_similarities_of(s, conv,
-                        weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance),
-                        weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2),
-                        weighted_mean(s.hue_diff, s.w1), sim);
+  const PairedMoments light =
+      weighted_moments(s.light1, s.light2, s.w1, s.w2, conv.lightness_covariance);
+  color_similarities_of(
+      light, conv.unweighted_lightness_structure ? unweighted_moments(s.light1, s.light2) : light,
+      weighted_mean(s.chroma1, s.w1), weighted_mean(s.chroma2, s.w2),
+      weighted_mean(s.hue_diff, s.w1), sim);
   return sim;
 }
 
@@ -98,32 +100,89 @@ FeatureVector color_features(const NeighbourhoodSamples& s, const FeatureConvent
   return f;
 }
 
+namespace {
+
+// The sums of local_features_and_similarities' first pass, each accumulated in sample order.
+struct FirstMoments {
+  double w1 = 0, w2 = 0, curv1 = 0, curv2 = 0, light1 = 0, light2 = 0, chroma1 = 0, chroma2 = 0,
+         hue = 0;
+  double plain_light1 = 0, plain_light2 = 0;  ///< unweighted sums (kPlain only)
+};
+
+// Both passes of weighted_moments_from_sums for the curvatures and the lightnesses, and with
+// kPlain those of unweighted_moments for the lightnesses too, in two loops over the samples:
+// every sum accumulates the same terms in the same order as in those functions (same bits),
+// but the independent sums advance together instead of one pass per statistic.
+template <bool kPlain>
+void paired_moments(const NeighbourhoodSamples& s, const FeatureConventions& conv,
+                    PairedMoments& curv, PairedMoments& light, PairedMoments& plain,
+                    FirstMoments& a) {
+  const std::size_t n = s.w1.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w1 = s.w1[i], w2 = s.w2[i];
+    a.w1 += w1;
+    a.w2 += w2;
+    a.curv1 += s.curv1[i] * w1;
+    a.curv2 += s.curv2[i] * w2;
+    a.light1 += s.light1[i] * w1;
+    a.light2 += s.light2[i] * w2;
+    a.chroma1 += s.chroma1[i] * w1;
+    a.chroma2 += s.chroma2[i] * w2;
+    a.hue += s.hue_diff[i] * w1;
+    if (kPlain) {
+      a.plain_light1 += s.light1[i];
+      a.plain_light2 += s.light2[i];
+    }
+  }
+  const double count = static_cast<double>(n);
+  const double cm1 = a.curv1 / a.w1, cm2 = a.curv2 / a.w2;
+  const double lm1 = a.light1 / a.w1, lm2 = a.light2 / a.w2;
+  const double pm1 = a.plain_light1 / count, pm2 = a.plain_light2 / count;
+  const double* wc = conv.curvature_covariance.weighting == CovarianceWeighting::kFirst
+                         ? s.w1.data()
+                         : s.w2.data();
+  const double* wl = conv.lightness_covariance.weighting == CovarianceWeighting::kFirst
+                         ? s.w1.data()
+                         : s.w2.data();
+  double cv1 = 0, cv2 = 0, ccov = 0, lv1 = 0, lv2 = 0, lcov = 0, pv1 = 0, pv2 = 0, pcov = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w1 = s.w1[i], w2 = s.w2[i];
+    const double c1 = s.curv1[i] - cm1, c2 = s.curv2[i] - cm2;
+    cv1 += w1 * c1 * c1;
+    cv2 += w2 * c2 * c2;
+    ccov += wc[i] * c1 * c2;
+    const double l1 = s.light1[i] - lm1, l2 = s.light2[i] - lm2;
+    lv1 += w1 * l1 * l1;
+    lv2 += w2 * l2 * l2;
+    lcov += wl[i] * l1 * l2;
+    if (kPlain) {
+      const double p1 = s.light1[i] - pm1, p2 = s.light2[i] - pm2;
+      pv1 += p1 * p1;
+      pv2 += p2 * p2;
+      pcov += p1 * p2;
+    }
+  }
+  curv = weighted_moments_finish(cm1, cm2, cv1, cv2, ccov, a.w1, a.w2, conv.curvature_covariance);
+  light = weighted_moments_finish(lm1, lm2, lv1, lv2, lcov, a.w1, a.w2, conv.lightness_covariance);
+  if (kPlain) plain = unweighted_moments_finish(pm1, pm2, pv1, pv2, pcov, count);
+}
+
+}  // namespace
+
 FeatureVector local_features_and_similarities(const NeighbourhoodSamples& s,
                                               const FeatureConventions& conv) {
-  // curvature_features and color_similarities with every first-moment sum taken in one pass
-  // over the samples (the sums of w1 and w2 once instead of four times): each sum accumulates
-  // the same terms in the same order, so the values are theirs, bit for bit.
-  double sw1 = 0, sw2 = 0, c1 = 0, c2 = 0, l1 = 0, l2 = 0, ch1 = 0, ch2 = 0, hue = 0;
-  for (std::size_t i = 0; i < s.w1.size(); ++i) {
-    const double w1 = s.w1[i], w2 = s.w2[i];
-    sw1 += w1;
-    sw2 += w2;
-    c1 += s.curv1[i] * w1;
-    c2 += s.curv2[i] * w2;
-    l1 += s.light1[i] * w1;
-    l2 += s.light2[i] * w2;
-    ch1 += s.chroma1[i] * w1;
-    ch2 += s.chroma2[i] * w2;
-    hue += s.hue_diff[i] * w1;
+  // curvature_features and color_similarities with the sums of every statistic taken in two
+  // passes over the samples (paired_moments): the values are theirs, bit for bit.
+  PairedMoments curv, light, plain;
+  FirstMoments a;
+  if (conv.unweighted_lightness_structure) {
+    paired_moments<true>(s, conv, curv, light, plain, a);
+  } else {
+    paired_moments<false>(s, conv, curv, light, plain, a);
   }
-  FeatureVector f = curvature_features_of(
-      weighted_moments_from_sums(s.curv1, s.curv2, s.w1, s.w2, sw1, sw2, c1, c2,
-                                 conv.curvature_covariance),
-      conv);
-  color_similarities_of(s, conv,
-                        weighted_moments_from_sums(s.light1, s.light2, s.w1, s.w2, sw1, sw2, l1,
-                                                   l2, conv.lightness_covariance),
-                        ch1 / sw1, ch2 / sw2, hue / sw1, f);
+  FeatureVector f = curvature_features_of(curv, conv);
+  color_similarities_of(light, conv.unweighted_lightness_structure ? plain : light,
+                        a.chroma1 / a.w1, a.chroma2 / a.w2, a.hue / a.w1, f);
   return f;
 }
 

@@ -39,21 +39,29 @@ PairedMoments weighted_moments_from_sums(const std::vector<double>& x1,
                                          const std::vector<double>& w2, double sum_w1,
                                          double sum_w2, double sum_x1, double sum_x2,
                                          const CovarianceConvention& convention) {
-  PairedMoments m;
-  m.mean1 = sum_x1 / sum_w1;
-  m.mean2 = sum_x2 / sum_w2;
+  const double mean1 = sum_x1 / sum_w1;
+  const double mean2 = sum_x2 / sum_w2;
   double var1 = 0, var2 = 0, cov = 0;
   const auto& wc = convention.weighting == CovarianceWeighting::kFirst ? w1 : w2;
   for (std::size_t i = 0; i < x1.size(); ++i) {
-    const double d1 = x1[i] - m.mean1;
-    const double d2 = x2[i] - m.mean2;
+    const double d1 = x1[i] - mean1;
+    const double d2 = x2[i] - mean2;
     var1 += w1[i] * d1 * d1;
     var2 += w2[i] * d2 * d2;
     cov += wc[i] * d1 * d2;
   }
+  return weighted_moments_finish(mean1, mean2, var1, var2, cov, sum_w1, sum_w2, convention);
+}
+
+PairedMoments weighted_moments_finish(double mean1, double mean2, double var1, double var2,
+                                      double cross, double sum_w1, double sum_w2,
+                                      const CovarianceConvention& convention) {
+  PairedMoments m;
+  m.mean1 = mean1;
+  m.mean2 = mean2;
   m.sd1 = std::sqrt(var1 / sum_w1);
   m.sd2 = std::sqrt(var2 / sum_w2);
-  m.cov12 = cov / sum_w1;
+  m.cov12 = cross / sum_w1;
   if (convention.clamp_at_zero && m.cov12 < 0) m.cov12 = 0;
   return m;
 }
@@ -65,20 +73,27 @@ PairedMoments unweighted_moments(const std::vector<double>& x1, const std::vecto
     sum1 += x1[i];
     sum2 += x2[i];
   }
-  PairedMoments m;
-  m.mean1 = sum1 / n;
-  m.mean2 = sum2 / n;
+  const double mean1 = sum1 / n;
+  const double mean2 = sum2 / n;
   double var1 = 0, var2 = 0, cov = 0;
   for (std::size_t i = 0; i < x1.size(); ++i) {
-    const double d1 = x1[i] - m.mean1;
-    const double d2 = x2[i] - m.mean2;
+    const double d1 = x1[i] - mean1;
+    const double d2 = x2[i] - mean2;
     var1 += d1 * d1;
     var2 += d2 * d2;
     cov += d1 * d2;
   }
+  return unweighted_moments_finish(mean1, mean2, var1, var2, cov, n);
+}
+
+PairedMoments unweighted_moments_finish(double mean1, double mean2, double var1, double var2,
+                                        double cross, double n) {
+  PairedMoments m;
+  m.mean1 = mean1;
+  m.mean2 = mean2;
   m.sd1 = std::sqrt(var1 / n);
   m.sd2 = std::sqrt(var2 / n);
-  m.cov12 = cov / n;
+  m.cov12 = cross / n;
   return m;
 }
 

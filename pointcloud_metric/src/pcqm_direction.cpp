@@ -89,17 +89,22 @@ struct PointData {
 /// alike).
 class TreeColours {
  public:
-  TreeColours(const std::vector<Rgb>& colors, const KdTree& tree) {
+  /// Gathers in parallel (`threads` as DirectionParams::threads); every element is written
+  /// on its own, so the copy does not depend on the thread count.
+  TreeColours(const std::vector<Rgb>& colors, const KdTree& tree, int threads) {
     const std::vector<std::uint32_t>& order = tree.input_index();
+    const auto n = static_cast<std::int64_t>(order.size());
     bytes_.resize(order.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      if (!to_bytes(colors[order[i]], bytes_[i])) {
-        LargeArray<std::array<std::uint8_t, 3>>().swap(bytes_);
-        exact_.resize(order.size());
-        for (std::size_t j = 0; j < order.size(); ++j) exact_[j] = colors[order[j]];
-        return;
-      }
+    bool all_bytes = true;
+#pragma omp parallel for num_threads(thread_count(threads)) reduction(&& : all_bytes)
+    for (std::int64_t i = 0; i < n; ++i) {
+      all_bytes = to_bytes(colors[order[std::size_t(i)]], bytes_[std::size_t(i)]) && all_bytes;
     }
+    if (all_bytes) return;
+    LargeArray<std::array<std::uint8_t, 3>>().swap(bytes_);
+    exact_.resize(order.size());
+#pragma omp parallel for num_threads(thread_count(threads))
+    for (std::int64_t j = 0; j < n; ++j) exact_[std::size_t(j)] = colors[order[std::size_t(j)]];
   }
   Rgb operator[](std::size_t i) const {
     if (!exact_.empty()) return exact_[i];
@@ -545,8 +550,8 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
 
   stage("curvatures and correspondences");
   PointData data = [&] {
-    const TreeColours iterated_colours(iterated.colors, iterated_tree);
-    const TreeColours other_colours(other.colors, other_tree);
+    const TreeColours iterated_colours(iterated.colors, iterated_tree, params.threads);
+    const TreeColours other_colours(other.colors, other_tree, params.threads);
     if (params.inputs_done) params.inputs_done();  // `iterated` and `other` are not read below
     clouds.iterated_colours = &iterated_colours;
     clouds.other_colours = &other_colours;
@@ -568,7 +573,9 @@ DirectionOutput compute_direction(const ColoredCloud& iterated, const ColoredClo
     if (count > kUnderdeterminedShare * double(iterated_tree.size())) too_common |= kind;
   }
   if (too_common != 0) out.suggestion = suggest_settings(clouds, p, too_common);
-  for (FeatureVector& f : out.features) similarities_to_features(f);
+  const auto n = static_cast<std::int64_t>(out.features.size());
+#pragma omp parallel for num_threads(thread_count(p.threads))
+  for (std::int64_t i = 0; i < n; ++i) similarities_to_features(out.features[std::size_t(i)]);
   if (p.diagnostics) {
     out.diagnostics = diagnostics_of(data, iterated_tree);
     out.diagnostics.count_statistics = std::move(counts);

@@ -102,40 +102,65 @@ double smallest_singular_value_bound(const double r[6][7], const double norm0[6]
 
 }  // namespace
 
-bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]) {
-  double norm0[6];
-  for (int k = 0; k < 6; ++k) {
-    double sum = 0;
-    for (std::size_t i = 0; i < n; ++i) sum += col[k][i] * col[k][i];
-    norm0[k] = std::sqrt(sum);
+namespace {
+
+// One Householder step of solve_well_posed_least_squares on column K: its reflection applied to
+// the columns after it, r[K][*] filled. False when the pivot is too small (see there).
+//
+// Every sum runs over i in ascending order exactly as a plain loop per column would, but the
+// dot products of the 6 - K later columns advance together in one loop over i: independent
+// chains of additions instead of one after the other (the fits are latency-bound on n of about
+// 16 to 20 rows); each sum sees the same operations in the same order, so the same bits.
+template <int K>
+bool householder_step(double* const col[7], std::size_t n, const double norm0[6], double r[6][7]) {
+  constexpr int kLater = 6 - K;  // columns K + 1 .. 6 (the right-hand side included)
+  const double* x = col[K];
+  double sigma = 0;
+  for (std::size_t i = K + 1; i < n; ++i) sigma += x[i] * x[i];
+  const double alpha = x[K];
+  const double norm = std::sqrt(alpha * alpha + sigma);
+  const double beta = alpha > 0 ? -norm : norm;
+  if (!(std::abs(beta) >= kFastSingularBound * norm0[K]) || norm == 0) return false;
+  const double v0 = alpha - beta;
+  const double vtv = v0 * v0 + sigma;
+  r[K][K] = beta;
+  double dot[kLater];
+  for (int j = 0; j < kLater; ++j) dot[j] = v0 * col[K + 1 + j][K];
+  for (std::size_t i = K + 1; i < n; ++i) {
+    const double xi = x[i];
+    for (int j = 0; j < kLater; ++j) dot[j] += xi * col[K + 1 + j][i];
   }
+  for (int j = 0; j < kLater; ++j) {
+    double* y = col[K + 1 + j];
+    const double f = 2 * dot[j] / vtv;
+    y[K] -= f * v0;
+    for (std::size_t i = K + 1; i < n; ++i) y[i] -= f * x[i];
+    r[K][K + 1 + j] = y[K];
+  }
+  return true;
+}
+
+}  // namespace
+
+bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]) {
+  // The six column norms' sums advance together (independent chains, each in row order).
+  double sum[6] = {0, 0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 6; ++k) sum[k] += col[k][i] * col[k][i];
+  }
+  double norm0[6];
+  for (int k = 0; k < 6; ++k) norm0[k] = std::sqrt(sum[k]);
   double r[6][7];
-  for (int k = 0; k < 6; ++k) {
-    const double* x = col[k];
-    double sigma = 0;
-    for (std::size_t i = k + 1; i < n; ++i) sigma += x[i] * x[i];
-    const double alpha = x[k];
-    const double norm = std::sqrt(alpha * alpha + sigma);
-    const double beta = alpha > 0 ? -norm : norm;
-    if (!(std::abs(beta) >= kFastSingularBound * norm0[k]) || norm == 0) return false;
-    const double v0 = alpha - beta;
-    const double vtv = v0 * v0 + sigma;
-    r[k][k] = beta;
-    for (int j = k + 1; j < 7; ++j) {
-      double* y = col[j];
-      double dot = v0 * y[k];
-      for (std::size_t i = k + 1; i < n; ++i) dot += x[i] * y[i];
-      const double f = 2 * dot / vtv;
-      y[k] -= f * v0;
-      for (std::size_t i = k + 1; i < n; ++i) y[i] -= f * x[i];
-      r[k][j] = y[k];
-    }
+  if (!(householder_step<0>(col, n, norm0, r) && householder_step<1>(col, n, norm0, r) &&
+        householder_step<2>(col, n, norm0, r) && householder_step<3>(col, n, norm0, r) &&
+        householder_step<4>(col, n, norm0, r) && householder_step<5>(col, n, norm0, r))) {
+    return false;
   }
   if (!(smallest_singular_value_bound(r, norm0) >= kFastSingularBound)) return false;
   for (int k = 5; k >= 0; --k) {
-    double sum = r[k][6];
-    for (int j = k + 1; j < 6; ++j) sum -= r[k][j] * c[j];
-    c[k] = sum / r[k][k];
+    double sum_k = r[k][6];
+    for (int j = k + 1; j < 6; ++j) sum_k -= r[k][j] * c[j];
+    c[k] = sum_k / r[k][k];
   }
   return true;
 }

@@ -1,7 +1,10 @@
-// Arrays of millions of elements: backed by transparent huge pages where the system offers them
-// per region (/sys/kernel/mm/transparent_hugepage/enabled = madvise, the common default), so that
-// hundreds of megabytes are faulted in 2 MiB at a time instead of 4 KiB; and, for arrays that
-// are filled element by element anyway (in parallel), not zeroed first by a serial pass.
+// Arrays of millions of elements: not zeroed first by a serial pass when they are filled element
+// by element anyway (in parallel); and, when QM3D_HUGE_PAGES=1 is in the environment, backed by
+// transparent huge pages where the system offers them per region
+// (/sys/kernel/mm/transparent_hugepage/enabled = madvise, the common default), so that hundreds
+// of megabytes are faulted in 2 MiB at a time instead of 4 KiB. The advice is off by default:
+// on virtual machines that hand free memory back to their host it makes every fault far slower
+// (large_arrays.cpp).
 #pragma once
 
 #include <cstddef>
@@ -13,8 +16,9 @@
 
 namespace qm3d {
 
-/// madvise(MADV_HUGEPAGE) on the whole 2 MiB pages inside [data, data + bytes); ignored below
-/// 4 MiB and wherever the system refuses (a hint only). Call it before the memory is written.
+/// madvise(MADV_HUGEPAGE) on the whole 2 MiB pages inside [data, data + bytes) when
+/// QM3D_HUGE_PAGES=1; ignored below 4 MiB and wherever the system refuses (a hint only). Call it
+/// before the memory is written.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
 /// Reserves room for n elements in `v` and advises huge pages for it; call it before filling

@@ -72,8 +72,20 @@ PairedMoments weighted_moments_from_sums(const std::vector<double>& x1,
                                          double sum_w2, double sum_x1, double sum_x2,
                                          const CovarianceConvention& convention);
 
+/// weighted_moments_from_sums' last step, given its means (sum x_k w_k / sum w_k) and its second
+/// pass's sums in sample order: var_k = sum w_k (x_k - mean_k)^2 (as `w * d * d`), cross = the
+/// convention's sum of w (x1 - mean1)(x2 - mean2) (as `w * d1 * d2`). The same operations.
+PairedMoments weighted_moments_finish(double mean1, double mean2, double var1, double var2,
+                                      double cross, double sum_w1, double sum_w2,
+                                      const CovarianceConvention& convention);
+
 /// Unweighted moments (divide by n), covariance not clamped: PCQM's lightness structure.
 PairedMoments unweighted_moments(const std::vector<double>& x1, const std::vector<double>& x2);
+
+/// unweighted_moments' last step, given its means (sum x_k / n) and its second pass's sums in
+/// sample order (sum (x_k - mean_k)^2, sum (x1 - mean1)(x2 - mean2)). The same operations.
+PairedMoments unweighted_moments_finish(double mean1, double mean2, double var1, double var2,
+                                        double cross, double n);
 
 /// Population standard deviation sqrt(sum (x - mean)^2 / n), summed in order.
 double population_sd(const std::vector<double>& x, double mean);
