@@ -37,7 +37,7 @@ def parse(lines):
         if in_table:
             body.append('')
             in_table = False
-        summary = re.match(r'^(ok: |FAIL: |.*: qm3d / |.* = [0-9.]+ \(target)', line)
+        summary = re.match(r'^(ok: |FAIL: |.*: qm3d / |.* = [0-9.]+( x)? \(target)', line)
         if summary:
             body.append('* ' + line)
     while body and body[-1] == '':

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Speed and memory of the qm3d tool on the large benchmark pairs, printed as Markdown tables.
 #
-#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|geodesicpsim|krasula|all|vs-reference]   (default: all)
+#   bench/run_benchmarks.sh [cmdm|pcqm|big|threads|batch|psnr|psnr_mesh|ibsm|graphsim|pointssim|geodesicpsim|krasula|icid|all|vs-reference]   (default: all)
 #
 #   cmdm     CMDM on the blob7 (164k vertices) and blob8 (655k) pairs
 #   pcqm     PCQM on the 1M- and 2M-point sphere pairs
@@ -60,6 +60,17 @@
 #            the pass over the pairs for the covariance between metrics); the Krasula values must
 #            be the same on every run. Targets: seconds, peak RSS well under 1 GB with one metric
 #            (reported, not enforced).
+#   icid     iCID of the 18 view pairs of blob4_geonoise at 256² (../shared/data/reference/icid/
+#            views; the CMDM report's protocol) with the pairs in parallel on 2 threads, timed in
+#            the process by bench/render/bench_icid (BM_Icid18ViewsInParallel/2, real time; the
+#            LAB2000HL table loaded once; QM3D_BENCH_ICID names the program, default next to the
+#            tool's build). When QM3D_ICID_REF names a command (made outside this repository) that
+#            reads a file of image pairs, one `A;B` a line, scores them all in one process with the
+#            reference iCID and prints one score a line, it runs in the same loop, interleaved,
+#            timed as a whole process (its start-up included); its mean score must equal the mean
+#            of `qm3d image A B --json` over the pairs (1e-10 relative). Target: the reference's
+#            wall / qm3d's >= 50 (reported, not enforced). Not part of `all` without
+#            QM3D_ICID_REF.
 #   vs-reference
 #            qm3d side by side with the reference implementations, built outside this repository
 #            and named by QM3D_MEPP2_CMDM (MEPP-team/MEPP2's example_cmdm: CMDM blob7 and blob8)
@@ -84,7 +95,8 @@
 # once with ../shared/tools/*.py, which need python3-numpy; default /tmp/qm3d-bench),
 # QM3D_BENCH_THREADS (threads of the main cases; default all cores), QM3D_BENCH_RUNS,
 # QM3D_PC_ERROR (psnr: the pc_error binary to compare with; unset = qm3d alone), QM3D_MMETRIC
-# (psnr_mesh: the mm binary; unset = qm3d alone), QM3D_MEPP2_CMDM and QM3D_PCQM_REF (vs-reference).
+# (psnr_mesh: the mm binary; unset = qm3d alone), QM3D_MEPP2_CMDM and QM3D_PCQM_REF (vs-reference),
+# QM3D_ICID_REF and QM3D_BENCH_ICID (icid).
 # The exit status is 1 when a score differs between runs or from its reference, a `threads` /
 # `batch` check fails, psnr's D1 PSNR differs from pc_error's, or vs-reference's score check
 # fails (speed and memory targets are reported, not enforced).
@@ -707,6 +719,48 @@ if [ "$WHICH" = all ] || [ "$WHICH" = graphsim ]; then
     printf '| %s | 2 | %s s | %s s | %s MB | %s | %s | %s |\n' "$label" "$(stats "$TMP/gt" 0)" \
       "$(stats "$TMP/gt" 1)" "$(stats "$TMP/gt" 2 1024)" "$s" "$expected" "$target"
   done
+fi
+if [ "$WHICH" = icid ] || { [ "$WHICH" = all ] && [ -n "${QM3D_ICID_REF:-}" ]; }; then
+  VIEWS="$ROOT/../shared/data/reference/icid/views/blob4_geonoise"
+  BENCH_ICID="${QM3D_BENCH_ICID:-$(dirname "$QM3D")/../bench/render/bench_icid}"
+  [ -x "$BENCH_ICID" ] || { echo "icid: no $BENCH_ICID (set QM3D_BENCH_ICID)" >&2; exit 2; }
+  : > "$TMP/icid_pairs"
+  for v in $(seq 0 17); do
+    printf '%s/view_%02d_reference.png;%s/view_%02d_distorted.png\n' "$VIEWS" "$v" "$VIEWS" "$v" \
+      >> "$TMP/icid_pairs"
+  done
+  qm3d_mean=$(while IFS=';' read -r a b; do
+    "$QM3D" --quiet image "$a" "$b" --json | $PY -c "import json,sys; print(repr(json.load(sys.stdin)['features']['icid']))"
+  done < "$TMP/icid_pairs" | $PY -c "import sys; v=[float(l) for l in sys.stdin]; print(repr(sum(v) / len(v)))")
+  : > "$TMP/icid_q"
+  : > "$TMP/icid_r"
+  : > "$TMP/icid_rs"
+  for _ in $(seq "$RUNS"); do
+    "$BENCH_ICID" --benchmark_filter='^BM_Icid18ViewsInParallel/2/' --benchmark_format=csv \
+      2> /dev/null | awk -F, '/BM_Icid18ViewsInParallel\/2/ {printf "%.4f\n", $3 / 1000}' >> "$TMP/icid_q"
+    if [ -n "${QM3D_ICID_REF:-}" ]; then
+      /usr/bin/time -f "%e %U %S %M" -o "$TMP/time" $QM3D_ICID_REF "$TMP/icid_pairs" > "$TMP/out" \
+        2> "$TMP/err" || { cat "$TMP/err" >&2; echo "FAIL: $QM3D_ICID_REF" >&2; STATUS=1; }
+      awk '{printf "%s %.2f %s\n", $1, $2 + $3, $4}' "$TMP/time" >> "$TMP/icid_r"
+      $PY -c "import sys; v=[float(l) for l in open(sys.argv[1]) if l.strip()]; print(repr(sum(v) / len(v)) if len(v) == 18 else 'error')" \
+        "$TMP/out" >> "$TMP/icid_rs"
+    fi
+  done
+  echo
+  echo "| case | qm3d (2 threads, in process) | reference (whole process) | speed-up | mean iCID qm3d / reference | target |"
+  echo "|---|---|---|---|---|---|"
+  ref_wall=n/a ref_score=n/a ratio=n/a
+  if [ -n "${QM3D_ICID_REF:-}" ]; then
+    ref_wall="$(stats "$TMP/icid_r" 0) s wall, $(stats "$TMP/icid_r" 1) s CPU"
+    ref_score=$(head -1 "$TMP/icid_rs")
+    ratio=$($PY -c "print('%.1f' % ($(median "$TMP/icid_r" 0) / $(median "$TMP/icid_q" 0)))")
+    if [ "$(sort -u "$TMP/icid_rs" | wc -l)" != 1 ] || [ "$ref_score" = error ] || \
+       ! $PY -c "import sys; a, b = float(sys.argv[1]), float(sys.argv[2]); sys.exit(0 if abs(a - b) <= 1e-10 * abs(b) else 1)" "$qm3d_mean" "$ref_score"; then
+      echo "FAIL: icid: the reference's mean $ref_score, qm3d's $qm3d_mean" >&2; STATUS=1
+    fi
+  fi
+  printf '| iCID, 18 view pairs at 256² (blob4_geonoise) | %s s | %s | %s | %s / %s | >= 50 x |\n' \
+    "$(stats "$TMP/icid_q" 0)" "$ref_wall" "$ratio" "$qm3d_mean" "$ref_score"
 fi
 if [ "$WHICH" = all ] || [ "$WHICH" = krasula ]; then
   KS="$DATA/krasula_10000.csv"
