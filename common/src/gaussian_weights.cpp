@@ -55,28 +55,30 @@ __attribute__((target("avx2"))) void weights_avx2(double* values, std::size_t n,
 }
 #endif
 
+// The weights of distances (kSquares false) or squared distances, in place: the vector
+// exponential where the machine has it, else gaussian_weight's own scalar operations.
+template <bool kSquares>
+void weights_in_place(double* values, std::size_t n, double sigma) {
+#if defined(QM3D_HAVE_LIBMVEC_AVX2)
+  if (cpu_has_avx2()) {
+    weights_avx2<kSquares>(values, n, sigma);
+    return;
+  }
+#endif
+  for (std::size_t i = 0; i < n; ++i) {
+    values[i] = kSquares ? gaussian_weight_from_square(values[i], sigma)
+                         : gaussian_weight(values[i], sigma);
+  }
+}
+
 }  // namespace
 
 void gaussian_weights_in_place(double* values, std::size_t n, double sigma) {
-#if defined(QM3D_HAVE_LIBMVEC_AVX2)
-  if (cpu_has_avx2()) {
-    weights_avx2<false>(values, n, sigma);
-    return;
-  }
-#endif
-  for (std::size_t i = 0; i < n; ++i) values[i] = gaussian_weight(values[i], sigma);
+  weights_in_place<false>(values, n, sigma);
 }
 
 void gaussian_weights_from_squares_in_place(double* values, std::size_t n, double sigma) {
-#if defined(QM3D_HAVE_LIBMVEC_AVX2)
-  if (cpu_has_avx2()) {
-    weights_avx2<true>(values, n, sigma);
-    return;
-  }
-#endif
-  const double scale = gaussian_weight_scale(sigma);
-  for (std::size_t i = 0; i < n; ++i)
-    values[i] = scale * std::exp(-values[i] / 2.0 / sigma / sigma);
+  weights_in_place<true>(values, n, sigma);
 }
 
 }  // namespace qm3d

@@ -16,10 +16,16 @@ inline double gaussian_weight_scale(double sigma) {
   return 1.0 / sigma / std::sqrt(2 * 3.141592);
 }
 
+/// The Gaussian weight of a squared distance s = d^2: exp(-s / (2 sigma^2)) times
+/// gaussian_weight_scale, written -s / 2.0 / sigma / sigma as in the references.
+inline double gaussian_weight_from_square(double squared, double sigma) {
+  return gaussian_weight_scale(sigma) * std::exp(-squared / 2.0 / sigma / sigma);
+}
+
 /// Gaussian weight G(d) = exp(-d^2 / (2 sigma^2)) / (sigma sqrt(2 * 3.141592)).
 /// Inline: it runs once per sample.
 inline double gaussian_weight(double distance, double sigma) {
-  return gaussian_weight_scale(sigma) * std::exp(-(distance * distance) / 2.0 / sigma / sigma);
+  return gaussian_weight_from_square(distance * distance, sigma);
 }
 
 /// gaussian_weight(values[i], sigma) for each i, in place: values are distances on entry,
