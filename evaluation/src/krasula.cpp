@@ -230,43 +230,29 @@ class Sweep {
   std::size_t at_ = 0;
 };
 
-// Counting at arbitrary x through the index (the pass over the pairs).
+// How a count at arbitrary x reaches the index: kCount counts; the other two only touch what the
+// count will read, so that the cross pass can run a chunk of pairs three times: touching the
+// index entries, then the buckets' values (both fetched together, not one miss after the
+// other), then counting in the cache.
+enum class Reach { kCount, kTouchIndex, kTouchValues };
+
+template <Reach kReach>
 class Probe {
  public:
   explicit Probe(const IndexedValues& values) : v_(values) {}
   std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
-    return v_.below_and_equal(x);
-  }
-
- private:
-  const IndexedValues& v_;
-};
-
-// Probe's interface, but only touching what a count at x will read, so that the cross pass can
-// run a chunk of pairs three times: touching the index entries, then the buckets' values (both
-// fetched together, not one miss after the other), then counting in the cache.
-class TouchIndex {
- public:
-  explicit TouchIndex(const IndexedValues& values) : v_(values) {}
-  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
-    __builtin_prefetch(v_.start.data() + v_.key(x));
-    return {0, 0};
-  }
-
- private:
-  const IndexedValues& v_;
-};
-
-class TouchValues {
- public:
-  explicit TouchValues(const IndexedValues& values) : v_(values) {}
-  std::pair<std::uint64_t, std::uint64_t> below_and_equal(double x) const {
-    const std::size_t b = v_.key(x), lo = v_.start[b], hi = v_.start[b + 1];
-    if (lo < hi) {
-      __builtin_prefetch(v_.address(lo));
-      __builtin_prefetch(v_.address(hi - 1));
+    if constexpr (kReach == Reach::kCount) {
+      return v_.below_and_equal(x);
+    } else {
+      const std::size_t b = v_.key(x);
+      if constexpr (kReach == Reach::kTouchIndex) {
+        __builtin_prefetch(v_.start.data() + b);
+      } else if (const std::size_t lo = v_.start[b], hi = v_.start[b + 1]; lo < hi) {
+        __builtin_prefetch(v_.address(lo));
+        __builtin_prefetch(v_.address(hi - 1));
+      }
+      return {0, 0};
     }
-    return {0, 0};
   }
 
  private:
@@ -322,8 +308,8 @@ class Counts {
   const SortedValues& s_;
   Search similar_, positive_, negative_;
 };
-using Counter = Counts<Sweep>;  // queries in ascending order
-using Lookup = Counts<Probe>;   // queries in any order
+using Counter = Counts<Sweep>;                // queries in ascending order
+using Lookup = Counts<Probe<Reach::kCount>>;  // queries in any order
 
 // Pairs in blocks: fn(begin, count, d, first, second) with d[m * count + i] metric m's
 // difference s_m[first[i]] - s_m[second[i]] of pair begin + i, for consecutive blocks in pair
@@ -463,8 +449,8 @@ void cross_pass(Analysis& a, const std::vector<std::int8_t>& labels, const PairB
 #pragma omp parallel
     {
       CountSums different(k), similar(k), better(k);
-      std::vector<Counts<TouchIndex>> index(a.sorted.begin(), a.sorted.end());
-      std::vector<Counts<TouchValues>> values(a.sorted.begin(), a.sorted.end());
+      std::vector<Counts<Probe<Reach::kTouchIndex>>> index(a.sorted.begin(), a.sorted.end());
+      std::vector<Counts<Probe<Reach::kTouchValues>>> values(a.sorted.begin(), a.sorted.end());
       std::vector<Lookup> lookups(a.sorted.begin(), a.sorted.end());
       std::vector<std::uint64_t> ds(k), bw(k);  // counts below 2^32 (kMaxPairs)
       // This thread's chunks [c0, c1), pipelined: chunk c's index entries are touched two steps
