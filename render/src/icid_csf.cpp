@@ -355,22 +355,22 @@ struct PrunedBlock {
 };
 
 // A full block's lines move between their own contiguous storage and the lane layout in
-// 4 x 4 tiles transposed in registers (GCC vector types; the same arithmetic, element by
-// element, as the scalar loops that serve partial blocks).
+// 4 x 4 tiles transposed in registers (GCC/clang vector types and __builtin_shufflevector,
+// which both compilers have; the same arithmetic, element by element, as the scalar loops
+// that serve partial blocks).
 static_assert(kLanes == 4, "the tiles are kLanes x 4");
 typedef double Tile4 __attribute__((vector_size(32), aligned(8), may_alias));
-typedef long long Mask4 __attribute__((vector_size(32)));
 
 /// r[c][t] -> r[t][c].
 __attribute__((always_inline)) inline void transpose(Tile4 r[4]) {
-  const Tile4 t0 = __builtin_shuffle(r[0], r[1], Mask4{0, 4, 2, 6});
-  const Tile4 t1 = __builtin_shuffle(r[0], r[1], Mask4{1, 5, 3, 7});
-  const Tile4 t2 = __builtin_shuffle(r[2], r[3], Mask4{0, 4, 2, 6});
-  const Tile4 t3 = __builtin_shuffle(r[2], r[3], Mask4{1, 5, 3, 7});
-  r[0] = __builtin_shuffle(t0, t2, Mask4{0, 1, 4, 5});
-  r[1] = __builtin_shuffle(t1, t3, Mask4{0, 1, 4, 5});
-  r[2] = __builtin_shuffle(t0, t2, Mask4{2, 3, 6, 7});
-  r[3] = __builtin_shuffle(t1, t3, Mask4{2, 3, 6, 7});
+  const Tile4 t0 = __builtin_shufflevector(r[0], r[1], 0, 4, 2, 6);
+  const Tile4 t1 = __builtin_shufflevector(r[0], r[1], 1, 5, 3, 7);
+  const Tile4 t2 = __builtin_shufflevector(r[2], r[3], 0, 4, 2, 6);
+  const Tile4 t3 = __builtin_shufflevector(r[2], r[3], 1, 5, 3, 7);
+  r[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  r[1] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  r[2] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+  r[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
 }
 
 /// Elements q0 .. q0 + 3 of the four lines of `lines` as four lane vectors.
