@@ -93,23 +93,27 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   return p;
 }
 
-// Values of the other mesh interpolated at each matched point.
+// Values of the other mesh interpolated at each matched point (each on its own: parallel).
 std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& other, const std::vector<double>& values) {
+                                    const HalfedgeMesh& other, const std::vector<double>& values,
+                                    int threads) {
   std::vector<double> out(matches.size());
-  for (std::size_t i = 0; i < matches.size(); ++i) {
+  const auto n = static_cast<std::int64_t>(matches.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::int64_t i = 0; i < n; ++i) {
     out[i] = interpolate(matches[i], other.triangles[matches[i].face], values);
   }
   return out;
 }
 
 std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& other, const std::vector<Lab>& colors) {
+                                    const HalfedgeMesh& other, const std::vector<Lab>& colors,
+                                    int threads) {
   std::vector<double> channel(colors.size());
   std::vector<Lab> out(matches.size());
   for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
     for (std::size_t i = 0; i < colors.size(); ++i) channel[i] = colors[i].*c;
-    const auto values = interpolate_all(matches, other, channel);
+    const auto values = interpolate_all(matches, other, channel, threads);
     for (std::size_t i = 0; i < out.size(); ++i) out[i].*c = values[i];
   }
   return out;
@@ -202,7 +206,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
                                           const std::string& label, ProgressSteps& progress) {
   const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
-  if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab);
+  if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab, threads);
   const double maxdim = iterated.box_size;
   std::vector<FeatureVector> sums(iterated.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
@@ -227,7 +231,7 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
     // The other mesh's first: only their values at the matched points are kept.
     std::vector<std::vector<double>> curv_match;
     for (const auto* c : curvatures.get(other.mesh, radii, maxdim, &curvature_done)) {
-      curv_match.push_back(interpolate_all(matches, other.mesh, *c));
+      curv_match.push_back(interpolate_all(matches, other.mesh, *c, threads));
     }
     curvatures.release(other.mesh);
     const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
