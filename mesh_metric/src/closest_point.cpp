@@ -31,8 +31,8 @@ bool same_point(const Vec3& a, const Vec3& b) {
 Vec3 project_on_line(const Vec3& p1, const Vec3& p2, const Vec3& q) {
   const Vec3 d = sub(p2, p1);
   const Vec3 dp = sub(q, p1);
-  const double lambda = (d[0] * dp[0] + d[1] * dp[1] + d[2] * dp[2]) /
-                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const double lambda =
+      (d[0] * dp[0] + d[1] * dp[1] + d[2] * dp[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   return {p1[0] + lambda * d[0], p1[1] + lambda * d[1], p1[2] + lambda * d[2]};
 }
 
@@ -229,16 +229,19 @@ FaceBoxTree::FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Trian
   std::iota(faces_.begin(), faces_.end(), 0u);
   if (count < 2) return;
   boxes_.resize(count - 1);
+  std::vector<KeyedFace> keyed(count);
+  for (std::uint32_t f = 0; f < count; ++f) keyed[f].face = f;
 #pragma omp parallel num_threads(threads)
 #pragma omp single
-  build(0, 0, count);
+  build(keyed, 0, 0, count);
+  for (std::uint32_t i = 0; i < count; ++i) faces_[i] = keyed[i].face;
 }
 
 // Compute_bbox: the union of the faces' boxes (each its corners' min and max).
-FaceBoxTree::Box FaceBoxTree::bounds(std::uint32_t first, std::uint32_t count) const {
-  Box b{positions_[triangles_[faces_[first]][0]], positions_[triangles_[faces_[first]][0]]};
-  for (std::uint32_t i = first; i < first + count; ++i) {
-    for (std::uint32_t v : triangles_[faces_[i]]) {
+FaceBoxTree::Box FaceBoxTree::bounds(const KeyedFace* faces, std::uint32_t count) const {
+  Box b{positions_[triangles_[faces[0].face][0]], positions_[triangles_[faces[0].face][0]]};
+  for (std::uint32_t i = 0; i < count; ++i) {
+    for (std::uint32_t v : triangles_[faces[i].face]) {
       for (int k = 0; k < 3; ++k) {
         b.lo[k] = std::min(b.lo[k], positions_[v][k]);
         b.hi[k] = std::max(b.hi[k], positions_[v][k]);
@@ -253,35 +256,38 @@ FaceBoxTree::Box FaceBoxTree::bounds(std::uint32_t first, std::uint32_t count) c
 // x, y, z on equal extents as longest_axis decides), then its two children: primitives for 2
 // faces, a primitive and a node of 2 for 3, else nodes of count / 2 and the rest. Pre-order
 // layout: the left child node follows its parent, the right one after the left's count / 2 - 1
-// nodes.
-void FaceBoxTree::build(std::size_t node, std::uint32_t first, std::uint32_t count) {
-  const Box box = bounds(first, count);
+// nodes. The faces are split with their keys beside them (`faces`, in the order the splits leave
+// them): nth_element makes the same comparisons on the same keys as on CGAL's primitives, so
+// it leaves the faces in the same order.
+void FaceBoxTree::build(std::vector<KeyedFace>& faces, std::size_t node, std::uint32_t first,
+                        std::uint32_t count) {
+  KeyedFace* const begin = faces.data() + first;
+  const Box box = bounds(begin, count);
   boxes_[node] = box;
   const double dx = box.hi[0] - box.lo[0];
   const double dy = box.hi[1] - box.lo[1];
   const double dz = box.hi[2] - box.lo[2];
   const int axis = dx >= dy ? (dx >= dz ? 0 : 2) : (dy >= dz ? 1 : 2);
-  const auto begin = faces_.begin() + first;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    begin[i].key = positions_[triangles_[begin[i].face][0]][axis];
+  }
   std::nth_element(begin, begin + count / 2, begin + count,
-                   [this, axis](std::uint32_t f1, std::uint32_t f2) {
-                     return positions_[triangles_[f1][0]][axis] <
-                            positions_[triangles_[f2][0]][axis];
-                   });
+                   [](const KeyedFace& f1, const KeyedFace& f2) { return f1.key < f2.key; });
   if (count == 2) return;
   if (count == 3) {
-    build(node + 1, first + 1, 2);
+    build(faces, node + 1, first + 1, 2);
     return;
   }
   const std::uint32_t half = count / 2;
   if (count > kTaskFaces) {
 #pragma omp task default(shared) firstprivate(node, first, half)
-    build(node + 1, first, half);
+    build(faces, node + 1, first, half);
 #pragma omp task default(shared) firstprivate(node, first, half, count)
-    build(node + half, first + half, count - half);
+    build(faces, node + half, first + half, count - half);
 #pragma omp taskwait
   } else {
-    build(node + 1, first, half);
-    build(node + half, first + half, count - half);
+    build(faces, node + 1, first, half);
+    build(faces, node + half, first + half, count - half);
   }
 }
 

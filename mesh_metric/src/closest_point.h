@@ -73,8 +73,7 @@ class FaceBoxTree {
  public:
   /// Builds over every triangle (at least one) with up to `threads` OpenMP threads; the arrays
   /// must outlive the tree.
-  FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Triangle>& triangles,
-              int threads);
+  FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Triangle>& triangles, int threads);
 
   /// CGAL's closest_point_and_primitive(q, hint): the hint (a point on the mesh and its face)
   /// is kept unless a face visited by the traversal is at most as far and gives another point.
@@ -84,9 +83,15 @@ class FaceBoxTree {
   struct Box {
     Vec3 lo, hi;
   };
+  /// A face and its reference point's coordinate along the axis of the node being split.
+  struct KeyedFace {
+    double key;
+    std::uint32_t face;
+  };
   struct Search;
-  Box bounds(std::uint32_t first, std::uint32_t count) const;
-  void build(std::size_t node, std::uint32_t first, std::uint32_t count);
+  Box bounds(const KeyedFace* faces, std::uint32_t count) const;
+  void build(std::vector<KeyedFace>& faces, std::size_t node, std::uint32_t first,
+             std::uint32_t count);
   void visit_face(std::uint32_t face, Search& s) const;
   void traverse(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
