@@ -125,7 +125,8 @@ NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
     throw std::logic_error("NearestPointIndex: bad point set");
   }
   const auto count = static_cast<std::uint32_t>(which.size());
-  std::vector<std::uint32_t> order = which;  // sorted into tree order by the build
+  std::vector<KeyedPoint> order(count);  // sorted into tree order by the build
+  for (std::uint32_t i = 0; i < count; ++i) order[i].point = which[i];
   splits_.resize(index_nodes(count));
 #pragma omp parallel num_threads(threads)
 #pragma omp single
@@ -133,35 +134,35 @@ NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
   points_.resize(count);
   ids_.resize(count);
   for (std::uint32_t i = 0; i < count; ++i) {
-    points_[i] = positions[order[i]];
-    ids_[i] = ids[order[i]];
+    points_[i] = positions[order[i].point];
+    ids_[i] = ids[order[i].point];
   }
 }
 
 // Splits at the median along the dimension of largest extent.
-void NearestPointIndex::build(std::vector<std::uint32_t>& order, std::size_t node,
-                              std::uint32_t first, std::uint32_t count,
-                              const ArrayView<Vec3>& points) {
+// The points are split with their coordinate along the split's dimension beside them.
+void NearestPointIndex::build(std::vector<KeyedPoint>& order, std::size_t node, std::uint32_t first,
+                              std::uint32_t count, const ArrayView<Vec3>& points) {
   if (count <= kLeafPoints) return;
-  Vec3 lo = points[order[first]], hi = lo;
-  for (std::uint32_t i = first + 1; i < first + count; ++i) {
+  KeyedPoint* const begin = order.data() + first;
+  Vec3 lo = points[begin[0].point], hi = lo;
+  for (std::uint32_t i = 1; i < count; ++i) {
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], points[order[i]][k]);
-      hi[k] = std::max(hi[k], points[order[i]][k]);
+      lo[k] = std::min(lo[k], points[begin[i].point][k]);
+      hi[k] = std::max(hi[k], points[begin[i].point][k]);
     }
   }
   int dim = 0;
   for (int k = 1; k < 3; ++k) {
     if (hi[k] - lo[k] > hi[dim] - lo[dim]) dim = k;
   }
+  for (std::uint32_t i = 0; i < count; ++i) begin[i].key = points[begin[i].point][dim];
   const std::uint32_t half = count / 2;
-  const auto begin = order.begin() + first;
-  std::nth_element(begin, begin + half, begin + count, [&](std::uint32_t a, std::uint32_t b) {
-    return points[a][dim] < points[b][dim];
-  });
+  std::nth_element(begin, begin + half, begin + count,
+                   [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
   Split& split = splits_[node];
   split.dim = dim;
-  split.value = points[order[first + half]][dim];
+  split.value = begin[half].key;
   split.right = static_cast<std::uint32_t>(node + index_nodes(half) + 1);
   if (count > kTaskFaces) {
 #pragma omp task default(shared) firstprivate(node, first, half)

@@ -57,8 +57,13 @@ class NearestPointIndex {
     std::uint32_t right = 0;  ///< the right child's node (the left one follows its parent)
     int dim = 0;
   };
+  /// A point (its index in the positions) and its coordinate along a split's dimension.
+  struct KeyedPoint {
+    double key;
+    std::uint32_t point;
+  };
   struct Search;
-  void build(std::vector<std::uint32_t>& order, std::size_t node, std::uint32_t first,
+  void build(std::vector<KeyedPoint>& order, std::size_t node, std::uint32_t first,
              std::uint32_t count, const ArrayView<Vec3>& positions);
   void search(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
