@@ -93,15 +93,18 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   return p;
 }
 
-// Values of the other mesh interpolated at each matched point (each on its own: parallel).
-std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& other, const std::vector<double>& values,
-                                    int threads) {
-  std::vector<double> out(matches.size());
+// Values of the other mesh interpolated at each matched point, for each of `fields` at once
+// (each value on its own: parallel).
+std::vector<std::vector<double>> interpolate_all(
+    const std::vector<SurfaceMatch>& matches, const HalfedgeMesh& other,
+    const std::vector<const std::vector<double>*>& fields, int threads) {
+  std::vector<std::vector<double>> out(fields.size(), std::vector<double>(matches.size()));
   const auto n = static_cast<std::int64_t>(matches.size());
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (std::int64_t i = 0; i < n; ++i) {
-    out[i] = interpolate(matches[i], other.triangles[matches[i].face], values);
+    for (std::size_t j = 0; j < fields.size(); ++j) {
+      out[j][i] = interpolate(matches[i], other.triangles[matches[i].face], *fields[j]);
+    }
   }
   return out;
 }
@@ -109,12 +112,15 @@ std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
 std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
                                     const HalfedgeMesh& other, const std::vector<Lab>& colors,
                                     int threads) {
-  std::vector<double> channel(colors.size());
   std::vector<Lab> out(matches.size());
-  for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
-    for (std::size_t i = 0; i < colors.size(); ++i) channel[i] = colors[i].*c;
-    const auto values = interpolate_all(matches, other, channel, threads);
-    for (std::size_t i = 0; i < out.size(); ++i) out[i].*c = values[i];
+  const auto n = static_cast<std::int64_t>(matches.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const SurfaceMatch& m = matches[i];
+    const Triangle& t = other.triangles[m.face];
+    for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
+      out[i].*c = interpolate(m, colors[t[0]].*c, colors[t[1]].*c, colors[t[2]].*c);
+    }
   }
   return out;
 }
@@ -229,10 +235,8 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
     LoopProgress curvature_done(&progress,
                                 other.mesh.positions.size() + iterated.mesh.positions.size());
     // The other mesh's first: only their values at the matched points are kept.
-    std::vector<std::vector<double>> curv_match;
-    for (const auto* c : curvatures.get(other.mesh, radii, maxdim, &curvature_done)) {
-      curv_match.push_back(interpolate_all(matches, other.mesh, *c, threads));
-    }
+    std::vector<std::vector<double>> curv_match = interpolate_all(
+        matches, other.mesh, curvatures.get(other.mesh, radii, maxdim, &curvature_done), threads);
     curvatures.release(other.mesh);
     const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
     curvature_done.finish();

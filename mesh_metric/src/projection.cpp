@@ -355,10 +355,7 @@ std::vector<SurfaceMatches> match_to_surfaces(const std::vector<SurfaceQueries>&
 }
 
 double interpolate(const SurfaceMatch& m, const Triangle& t, const std::vector<double>& values) {
-  const auto& a = m.areas;
-  const double sum = a[0] + a[1] + a[2];
-  if (sum > 0) return (a[0] * values[t[0]] + a[1] * values[t[1]] + a[2] * values[t[2]]) / sum;
-  return (values[t[0]] + values[t[1]] + values[t[2]]) / 3;
+  return interpolate(m, values[t[0]], values[t[1]], values[t[2]]);
 }
 
 }  // namespace qm3d::mesh::detail

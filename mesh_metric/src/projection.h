@@ -63,7 +63,16 @@ struct SurfaceQueries {
 std::vector<SurfaceMatches> match_to_surfaces(const std::vector<SurfaceQueries>& sets, int threads);
 
 /// (a1 x1 + a2 x2 + a3 x3) / (a1 + a2 + a3), or the plain average when all areas are 0,
-/// written as MEPP2's matching_multires_update does.
+/// written as MEPP2's matching_multires_update does (x1, x2, x3: the values at the corners of
+/// the matched face).
+inline double interpolate(const SurfaceMatch& m, double x1, double x2, double x3) {
+  const auto& a = m.areas;
+  const double sum = a[0] + a[1] + a[2];
+  if (sum > 0) return (a[0] * x1 + a[1] * x2 + a[2] * x3) / sum;
+  return (x1 + x2 + x3) / 3;
+}
+
+/// interpolate with the corner values values[t[0]], values[t[1]], values[t[2]].
 double interpolate(const SurfaceMatch& m, const Triangle& t, const std::vector<double>& values);
 
 }  // namespace qm3d::mesh::detail
