@@ -48,8 +48,9 @@ Sample vertex_sample(const MatchedFields& f, std::uint32_t v) {
 // differ from the two-length ones in their last bits; both the one-walk and the per-radius walk
 // take t so, and the scores stay within 1e-13 relative (residues of an exact 0, on identical
 // geometry, within 1e-16 absolute).
-Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
-                       const Vec3& clipped, double t) {
+__attribute__((always_inline)) inline Sample crossing_sample(const MatchedFields& f,
+                                                             std::uint32_t v, std::uint32_t w,
+                                                             const Vec3& clipped, double t) {
   const auto& q = *f.matched_point;
   Sample s;
   s.point1 = add(f.mesh->positions[v], clipped);
@@ -116,8 +117,9 @@ void finish_colours(NeighbourhoodSamples& out) {
 // into the Gaussian weights of one level in a vectorised pass. MEPP2 takes the distance's square
 // root and squares it again in the weight: the same number to rounding, without a square root
 // per sample and side (scores within 1e-13 relative).
-void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, bool with_color,
-                 NeighbourhoodSamples& out) {
+__attribute__((always_inline)) inline void push_sample(const Sample& s, const Vec3& center1,
+                                                       const Vec3& center2, bool with_color,
+                                                       NeighbourhoodSamples& out) {
   out.w1.push_back(squared_distance(s.point1, center1));
   out.w2.push_back(squared_distance(s.point2, center2));
   out.curv1.push_back(s.curv1);
