@@ -1,13 +1,11 @@
 #include "qm3d/mesh/cmdm.h"
 
 #include <chrono>
-#include <future>
-#include <memory>
 
 #include "mesh_inputs.h"
 #include "multiscale.h"
-#include "qm3d/common/version.h"
 #include "qm3d/mesh/metrics.h"
+#include "qm3d/common/version.h"
 
 namespace qm3d::mesh {
 
@@ -15,11 +13,7 @@ MetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& disto
                           const CmdmOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path data_dir = resolve_data_dir(options.data_dir);
-  // The table is read while the meshes' connectivity is built (only their colours need it).
-  const std::shared_future<std::shared_ptr<const Lab2000hlTable>> table =
-      std::async(options.threads == 1 ? std::launch::deferred : std::launch::async, [data_dir] {
-        return Lab2000hlTable::shared(data_dir);
-      }).share();
+  const auto table = Lab2000hlTable::shared(data_dir);
   const LinearModel& model = options.model ? *options.model : cmdm_model();
   const Direction direction = options.direction.value_or(kCmdmDefaultDirection);
   // CMDM = weights . (features averaged over vertices and scales) = mean local distortion
@@ -38,10 +32,8 @@ MetricResult compute_cmdm(const ColoredMesh& reference, const ColoredMesh& disto
       r.per_element[v] = model.apply(sums[v]) / scales;
     }
   };
-  const detail::MultiscaleRun run{
-      direction,        options.scales,
-      options.threads,  [&table]() -> const Lab2000hlTable& { return *table.get(); },
-      options.progress, options.inputs_done};
+  const detail::MultiscaleRun run{direction, options.scales, options.threads, table.get(),
+                                  options.progress, options.inputs_done};
   MetricResult result =
       detail::run_multiscale(reference, distorted, detail::kCmdmDefinition, run, pool);
   result.metric = "cmdm";
@@ -64,18 +56,16 @@ MetricSpec cmdm_spec() {
   s.name = "cmdm";
   s.title = "CMDM";
   s.reproduces = "MEPP-team/MEPP2 @ d977d05 (CMDM filter, example_CMDM)";
-  s.summary =
-      "CMDM between two coloured meshes (OBJ, OFF, PLY; textured OBJ coloured from its "
-      "texture)";
+  s.summary = "CMDM between two coloured meshes (OBJ, OFF, PLY; textured OBJ coloured from its "
+              "texture)";
   s.applies_to = AppliesTo::kMeshes;
   s.reads = Input::Kind::kMesh;
   s.default_direction = kCmdmDefaultDirection;
-  s.direction_help =
-      "symmetric: mean of both directions; dist-to-ref: distorted vertices matched "
-      "on the reference (MEPP2's test_cmdm); ref-to-dist: the reverse";
+  s.direction_help = "symmetric: mean of both directions; dist-to-ref: distorted vertices matched "
+                     "on the reference (MEPP2's test_cmdm); ref-to-dist: the reverse";
   s.takes_model = true;
-  s.options = {
-      {"scales", "Number of scales (curvature radius 0.001 + 0.0005 l of BB)", 3, {}, 1, 100}};
+  s.options = {{"scales", "Number of scales (curvature radius 0.001 + 0.0005 l of BB)", 3, {}, 1,
+                100}};
   s.run = [](const MetricSpec& spec, const Input& ref, const Input& dist, const RunOptions& run,
              const OptionValues& values) {
     auto o = detail::with_run_options<CmdmOptions>(run);

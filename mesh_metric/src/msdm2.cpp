@@ -5,17 +5,16 @@
 
 #include "mesh_inputs.h"
 #include "multiscale.h"
-#include "qm3d/common/pooling.h"
-#include "qm3d/common/version.h"
 #include "qm3d/mesh/metrics.h"
+#include "qm3d/common/version.h"
+#include "qm3d/common/pooling.h"
 
 namespace qm3d::mesh {
 namespace {
 
 // Local score (f1 + f2 + 0.5 f3) / (2 + 0.5) (msdm2.h compute_statistics, param = 0.5), and
 // Minkowski pooling with p = 3 (process_msdm2_multires).
-const LinearModel kMsdm2Local{"msdm2",
-                              {0.4, 0.4, 0.2, 0, 0, 0, 0, 0},
+const LinearModel kMsdm2Local{"msdm2", {0.4, 0.4, 0.2, 0, 0, 0, 0, 0},
                               "Lavoue 2011; MEPP2 msdm2.h: (f1 + f2 + 0.5 f3) / 2.5"};
 constexpr double kMinkowskiExponent = 3.0;
 
@@ -36,8 +35,8 @@ MetricResult compute_msdm2(const ColoredMesh& reference, const ColoredMesh& dist
     r.score = minkowski_pool(local, kMinkowskiExponent);
     if (options.per_element) r.per_element = std::move(local);
   };
-  const detail::MultiscaleRun run{direction, options.scales,   options.threads,
-                                  {},        options.progress, options.inputs_done};
+  const detail::MultiscaleRun run{direction, options.scales, options.threads, nullptr,
+                                  options.progress, options.inputs_done};
   MetricResult result =
       detail::run_multiscale(reference, distorted, detail::kMsdm2Definition, run, pool);
   result.metric = "msdm2";
@@ -63,8 +62,8 @@ MetricSpec msdm2_spec() {
   s.reads = Input::Kind::kMesh;
   s.default_direction = kMsdm2DefaultDirection;
   s.direction_help = "dist-to-ref (MEPP2's example_msdm2), ref-to-dist or symmetric";
-  s.options = {
-      {"scales", "Number of scales (curvature radius (0.002 + 0.001 l) of BB)", 3, {}, 1, 100}};
+  s.options = {{"scales", "Number of scales (curvature radius (0.002 + 0.001 l) of BB)", 3, {}, 1,
+                100}};
   s.run = [](const MetricSpec& spec, const Input& ref, const Input& dist, const RunOptions& run,
              const OptionValues& values) {
     auto o = detail::with_run_options<Msdm2Options>(run);

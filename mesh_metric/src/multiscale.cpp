@@ -86,7 +86,7 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   p.mesh = build_halfedge_mesh(input, name, def.degenerate_edges, threads);
   // A caller that frees its inputs early trades their colours for a copy of the geometry.
   if (run.inputs_done) p.mesh.detach();
-  if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, run.colors(), name);
+  if (def.uses_color) p.lab = vertex_lab2000hl(p.mesh, input, *run.colors, name);
   p.box_size = longest_side(p.mesh, name);
   p.input_vertices = input.positions.size();
   warn_small_edges(p.mesh, name, p.box_size);

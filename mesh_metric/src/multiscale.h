@@ -19,16 +19,16 @@ namespace qm3d::mesh::detail {
 
 /// What distinguishes one multi-scale mesh metric from another.
 struct MultiscaleDefinition {
-  const char* name;  ///< "CMDM", "MSDM2" (for messages)
+  const char* name;                    ///< "CMDM", "MSDM2" (for messages)
   CurvatureVariant curvature;
-  DegenerateEdges degenerate_edges;  ///< curvature next to zero-length edges / zero-area faces
-  double first_radius;               ///< rc at the first scale (fraction of BB)
-  double radius_step;                ///< rc increment per scale
-  double neighbourhood_factor;       ///< neighbourhood radius h = factor * rc * BB
-  double sigma_divisor;              ///< Gaussian sigma = h / divisor
-  HeronAnchor anchor;                ///< where the interpolation distances are measured from
-  bool strict_outward_test;          ///< walk test "> 0" (MSDM2) or ">= 0" (CMDM)
-  bool uses_color;                   ///< sample LAB2000HL colours (CMDM)
+  DegenerateEdges degenerate_edges;    ///< curvature next to zero-length edges / zero-area faces
+  double first_radius;                 ///< rc at the first scale (fraction of BB)
+  double radius_step;                  ///< rc increment per scale
+  double neighbourhood_factor;         ///< neighbourhood radius h = factor * rc * BB
+  double sigma_divisor;                ///< Gaussian sigma = h / divisor
+  HeronAnchor anchor;                  ///< where the interpolation distances are measured from
+  bool strict_outward_test;            ///< walk test "> 0" (MSDM2) or ">= 0" (CMDM)
+  bool uses_color;                     ///< sample LAB2000HL colours (CMDM)
   FeatureConventions conventions;
 };
 
@@ -38,17 +38,10 @@ struct MultiscaleDefinition {
 /// radius rc BB from crossing edges only, with curvature_cmdm.hpp's replacement normals next to
 /// collinear faces; neighbourhood h = 3 rc BB, sigma = h / 3; Heron distances from the projected
 /// point; ">= 0" walk test; colour; w1 covariances clamped at 0.
-inline constexpr MultiscaleDefinition kCmdmDefinition{"CMDM",
-                                                      CurvatureVariant::kCmdm,
-                                                      DegenerateEdges::kRepaired,
-                                                      0.001,
-                                                      0.0005,
-                                                      3.0,
-                                                      3.0,
-                                                      HeronAnchor::kProjectedPoint,
-                                                      /*strict_outward_test=*/false,
-                                                      /*uses_color=*/true,
-                                                      kCmdmConventions};
+inline constexpr MultiscaleDefinition kCmdmDefinition{
+    "CMDM", CurvatureVariant::kCmdm, DegenerateEdges::kRepaired, 0.001, 0.0005, 3.0, 3.0,
+    HeronAnchor::kProjectedPoint, /*strict_outward_test=*/false, /*uses_color=*/true,
+    kCmdmConventions};
 
 /// MEPP2 process_msdm2_multires (SPEC-CMDM 2): rc = 0.002, +0.001 per scale; generic curvature
 /// (every edge in the ball); neighbourhood h = 5 rc BB, sigma = h / 2; Heron distances from the
@@ -57,17 +50,10 @@ inline constexpr MultiscaleDefinition kCmdmDefinition{"CMDM",
 /// case for it, so a vertex whose curvature ball, at a given scale, takes in a non-border edge of
 /// zero length or an edge of a zero-area face (NaN normal) gets a NaN tensor, its eigen-solver
 /// fails and its curvature is 0 at that scale.
-inline constexpr MultiscaleDefinition kMsdm2Definition{"MSDM2",
-                                                       CurvatureVariant::kGeneric,
-                                                       DegenerateEdges::kVoidTensor,
-                                                       0.002,
-                                                       0.001,
-                                                       5.0,
-                                                       2.0,
-                                                       HeronAnchor::kQueryPoint,
-                                                       /*strict_outward_test=*/true,
-                                                       /*uses_color=*/false,
-                                                       kMsdm2Conventions};
+inline constexpr MultiscaleDefinition kMsdm2Definition{
+    "MSDM2", CurvatureVariant::kGeneric, DegenerateEdges::kVoidTensor, 0.002, 0.001, 5.0, 2.0,
+    HeronAnchor::kQueryPoint, /*strict_outward_test=*/true, /*uses_color=*/false,
+    kMsdm2Conventions};
 
 /// Pools one direction's per-vertex feature sums (over `scales` scales) into `result`.
 using DirectionPooling = std::function<void(const std::vector<FeatureVector>& sums, int scales,
@@ -79,11 +65,8 @@ struct MultiscaleRun {
   /// OpenMP threads for every parallel part, concurrent tasks included; 0 = the calling
   /// thread's OpenMP default (omp_get_max_threads()). The result does not depend on it.
   int threads = 0;
-  /// The LAB2000HL table, required when the definition uses colour: asked for (possibly from
-  /// both preparing tasks at once) once a mesh's connectivity is built, so that it may still be
-  /// loading while that is built.
-  std::function<const Lab2000hlTable&()> colors;
-  ProgressCallback progress;  ///< optional: told each stage as it starts
+  const Lab2000hlTable* colors = nullptr;  ///< required when the definition uses colour
+  ProgressCallback progress;               ///< optional: told each stage as it starts
   /// Optional: called once both meshes are prepared (the inputs are not read afterwards).
   std::function<void()> inputs_done;
 };
@@ -91,7 +74,7 @@ struct MultiscaleRun {
 /// Runs a metric on a pair of meshes: prepares both, computes the requested directions, and
 /// averages them for the symmetric score.
 MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
-                            const MultiscaleDefinition& definition, const MultiscaleRun& run,
-                            const DirectionPooling& pool);
+                                const MultiscaleDefinition& definition, const MultiscaleRun& run,
+                                const DirectionPooling& pool);
 
 }  // namespace qm3d::mesh::detail
