@@ -63,8 +63,8 @@ class NearestPointIndex {
     std::uint32_t point;
   };
   struct Search;
-  void build(std::vector<KeyedPoint>& order, std::size_t node, std::uint32_t first,
-             std::uint32_t count, const ArrayView<Vec3>& positions);
+  void build(KeyedPoint* order, std::size_t node, std::uint32_t first, std::uint32_t count,
+             const ArrayView<Vec3>& positions);
   void search(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
   std::vector<Vec3> points_;  ///< in tree order
@@ -95,8 +95,7 @@ class FaceBoxTree {
   };
   struct Search;
   Box bounds(const KeyedFace* faces, std::uint32_t count) const;
-  void build(std::vector<KeyedFace>& faces, std::size_t node, std::uint32_t first,
-             std::uint32_t count);
+  void build(KeyedFace* faces, std::size_t node, std::uint32_t first, std::uint32_t count);
   void visit_face(std::uint32_t face, Search& s) const;
   void traverse(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
