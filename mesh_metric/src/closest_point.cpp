@@ -1,11 +1,9 @@
 #include "closest_point.h"
 
 #include <omp.h>
-#include <sys/mman.h>
 
 #include <algorithm>
 #include <limits>
-#include <new>
 #include <numeric>
 #include <stdexcept>
 
@@ -13,30 +11,6 @@
 
 namespace qm3d::mesh::detail {
 namespace {
-
-/// The builds' scratch records (n of a trivial type T, zeroed), taken from the system directly
-/// rather than from malloc: freeing a block of a few to 32 MB through malloc raises glibc's
-/// mmap threshold to its size, after which the metric's later arrays of that size come from the
-/// heap and stay there, which raised blob8's peak RSS by 10-20 MB.
-template <typename T>
-class ScratchArray {
- public:
-  explicit ScratchArray(std::size_t n) : bytes_(std::max<std::size_t>(n * sizeof(T), 1)) {
-    void* p = mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) throw std::bad_alloc();
-    data_ = static_cast<T*>(p);
-  }
-  ~ScratchArray() { munmap(data_, bytes_); }
-  ScratchArray(const ScratchArray&) = delete;
-  ScratchArray& operator=(const ScratchArray&) = delete;
-
-  T* data() { return data_; }
-  T& operator[](std::size_t i) { return data_[i]; }
-
- private:
-  std::size_t bytes_;
-  T* data_ = nullptr;
-};
 
 /// Node ranges of more faces (points) are built as OpenMP tasks.
 constexpr std::uint32_t kTaskFaces = 1u << 14;
@@ -58,8 +32,8 @@ bool same_point(const Vec3& a, const Vec3& b) {
 Vec3 project_on_line(const Vec3& p1, const Vec3& p2, const Vec3& q) {
   const Vec3 d = sub(p2, p1);
   const Vec3 dp = sub(q, p1);
-  const double lambda =
-      (d[0] * dp[0] + d[1] * dp[1] + d[2] * dp[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  const double lambda = (d[0] * dp[0] + d[1] * dp[1] + d[2] * dp[2]) /
+                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   return {p1[0] + lambda * d[0], p1[1] + lambda * d[1], p1[2] + lambda * d[2]};
 }
 
@@ -159,44 +133,43 @@ NearestPointIndex::NearestPointIndex(const ArrayView<Vec3>& positions,
     throw std::logic_error("NearestPointIndex: bad point set");
   }
   const auto count = static_cast<std::uint32_t>(which.size());
-  ScratchArray<KeyedPoint> order(count);  // sorted into tree order by the build
-  for (std::uint32_t i = 0; i < count; ++i) order[i].point = which[i];
+  std::vector<std::uint32_t> order = which;  // sorted into tree order by the build
   splits_.resize(index_nodes(count));
 #pragma omp parallel num_threads(threads)
 #pragma omp single
-  build(order.data(), 0, 0, count, positions);
+  build(order, 0, 0, count, positions);
   points_.resize(count);
   ids_.resize(count);
   for (std::uint32_t i = 0; i < count; ++i) {
-    points_[i] = positions[order[i].point];
-    ids_[i] = ids[order[i].point];
+    points_[i] = positions[order[i]];
+    ids_[i] = ids[order[i]];
   }
 }
 
 // Splits at the median along the dimension of largest extent.
-// The points are split with their coordinate along the split's dimension beside them.
-void NearestPointIndex::build(KeyedPoint* order, std::size_t node, std::uint32_t first,
-                              std::uint32_t count, const ArrayView<Vec3>& points) {
+void NearestPointIndex::build(std::vector<std::uint32_t>& order, std::size_t node,
+                              std::uint32_t first, std::uint32_t count,
+                              const ArrayView<Vec3>& points) {
   if (count <= kLeafPoints) return;
-  KeyedPoint* const begin = order + first;
-  Vec3 lo = points[begin[0].point], hi = lo;
-  for (std::uint32_t i = 1; i < count; ++i) {
+  Vec3 lo = points[order[first]], hi = lo;
+  for (std::uint32_t i = first + 1; i < first + count; ++i) {
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], points[begin[i].point][k]);
-      hi[k] = std::max(hi[k], points[begin[i].point][k]);
+      lo[k] = std::min(lo[k], points[order[i]][k]);
+      hi[k] = std::max(hi[k], points[order[i]][k]);
     }
   }
   int dim = 0;
   for (int k = 1; k < 3; ++k) {
     if (hi[k] - lo[k] > hi[dim] - lo[dim]) dim = k;
   }
-  for (std::uint32_t i = 0; i < count; ++i) begin[i].key = points[begin[i].point][dim];
   const std::uint32_t half = count / 2;
-  std::nth_element(begin, begin + half, begin + count,
-                   [](const KeyedPoint& a, const KeyedPoint& b) { return a.key < b.key; });
+  const auto begin = order.begin() + first;
+  std::nth_element(begin, begin + half, begin + count, [&](std::uint32_t a, std::uint32_t b) {
+    return points[a][dim] < points[b][dim];
+  });
   Split& split = splits_[node];
   split.dim = dim;
-  split.value = begin[half].key;
+  split.value = points[order[first + half]][dim];
   split.right = static_cast<std::uint32_t>(node + index_nodes(half) + 1);
   if (count > kTaskFaces) {
 #pragma omp task default(shared) firstprivate(node, first, half)
@@ -264,19 +237,16 @@ FaceBoxTree::FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Trian
   std::iota(faces_.begin(), faces_.end(), 0u);
   if (count < 2) return;
   boxes_.resize(count - 1);
-  ScratchArray<KeyedFace> keyed(count);
-  for (std::uint32_t f = 0; f < count; ++f) keyed[f].face = f;
 #pragma omp parallel num_threads(threads)
 #pragma omp single
-  build(keyed.data(), 0, 0, count);
-  for (std::uint32_t i = 0; i < count; ++i) faces_[i] = keyed[i].face;
+  build(0, 0, count);
 }
 
 // Compute_bbox: the union of the faces' boxes (each its corners' min and max).
-FaceBoxTree::Box FaceBoxTree::bounds(const KeyedFace* faces, std::uint32_t count) const {
-  Box b{positions_[triangles_[faces[0].face][0]], positions_[triangles_[faces[0].face][0]]};
-  for (std::uint32_t i = 0; i < count; ++i) {
-    for (std::uint32_t v : triangles_[faces[i].face]) {
+FaceBoxTree::Box FaceBoxTree::bounds(std::uint32_t first, std::uint32_t count) const {
+  Box b{positions_[triangles_[faces_[first]][0]], positions_[triangles_[faces_[first]][0]]};
+  for (std::uint32_t i = first; i < first + count; ++i) {
+    for (std::uint32_t v : triangles_[faces_[i]]) {
       for (int k = 0; k < 3; ++k) {
         b.lo[k] = std::min(b.lo[k], positions_[v][k]);
         b.hi[k] = std::max(b.hi[k], positions_[v][k]);
@@ -291,38 +261,35 @@ FaceBoxTree::Box FaceBoxTree::bounds(const KeyedFace* faces, std::uint32_t count
 // x, y, z on equal extents as longest_axis decides), then its two children: primitives for 2
 // faces, a primitive and a node of 2 for 3, else nodes of count / 2 and the rest. Pre-order
 // layout: the left child node follows its parent, the right one after the left's count / 2 - 1
-// nodes. The faces are split with their keys beside them (`faces`, in the order the splits leave
-// them): nth_element makes the same comparisons on the same keys as on CGAL's primitives, so
-// it leaves the faces in the same order.
-void FaceBoxTree::build(KeyedFace* faces, std::size_t node, std::uint32_t first,
-                        std::uint32_t count) {
-  KeyedFace* const begin = faces + first;
-  const Box box = bounds(begin, count);
+// nodes.
+void FaceBoxTree::build(std::size_t node, std::uint32_t first, std::uint32_t count) {
+  const Box box = bounds(first, count);
   boxes_[node] = box;
   const double dx = box.hi[0] - box.lo[0];
   const double dy = box.hi[1] - box.lo[1];
   const double dz = box.hi[2] - box.lo[2];
   const int axis = dx >= dy ? (dx >= dz ? 0 : 2) : (dy >= dz ? 1 : 2);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    begin[i].key = positions_[triangles_[begin[i].face][0]][axis];
-  }
+  const auto begin = faces_.begin() + first;
   std::nth_element(begin, begin + count / 2, begin + count,
-                   [](const KeyedFace& f1, const KeyedFace& f2) { return f1.key < f2.key; });
+                   [this, axis](std::uint32_t f1, std::uint32_t f2) {
+                     return positions_[triangles_[f1][0]][axis] <
+                            positions_[triangles_[f2][0]][axis];
+                   });
   if (count == 2) return;
   if (count == 3) {
-    build(faces, node + 1, first + 1, 2);
+    build(node + 1, first + 1, 2);
     return;
   }
   const std::uint32_t half = count / 2;
   if (count > kTaskFaces) {
 #pragma omp task default(shared) firstprivate(node, first, half)
-    build(faces, node + 1, first, half);
+    build(node + 1, first, half);
 #pragma omp task default(shared) firstprivate(node, first, half, count)
-    build(faces, node + half, first + half, count - half);
+    build(node + half, first + half, count - half);
 #pragma omp taskwait
   } else {
-    build(faces, node + 1, first, half);
-    build(faces, node + half, first + half, count - half);
+    build(node + 1, first, half);
+    build(node + half, first + half, count - half);
   }
 }
 

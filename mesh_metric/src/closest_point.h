@@ -57,14 +57,9 @@ class NearestPointIndex {
     std::uint32_t right = 0;  ///< the right child's node (the left one follows its parent)
     int dim = 0;
   };
-  /// A point (its index in the positions) and its coordinate along a split's dimension.
-  struct KeyedPoint {
-    double key;
-    std::uint32_t point;
-  };
   struct Search;
-  void build(KeyedPoint* order, std::size_t node, std::uint32_t first, std::uint32_t count,
-             const ArrayView<Vec3>& positions);
+  void build(std::vector<std::uint32_t>& order, std::size_t node, std::uint32_t first,
+             std::uint32_t count, const ArrayView<Vec3>& positions);
   void search(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
   std::vector<Vec3> points_;  ///< in tree order
@@ -78,7 +73,8 @@ class FaceBoxTree {
  public:
   /// Builds over every triangle (at least one) with up to `threads` OpenMP threads; the arrays
   /// must outlive the tree.
-  FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Triangle>& triangles, int threads);
+  FaceBoxTree(const ArrayView<Vec3>& positions, const ArrayView<Triangle>& triangles,
+              int threads);
 
   /// CGAL's closest_point_and_primitive(q, hint): the hint (a point on the mesh and its face)
   /// is kept unless a face visited by the traversal is at most as far and gives another point.
@@ -88,14 +84,9 @@ class FaceBoxTree {
   struct Box {
     Vec3 lo, hi;
   };
-  /// A face and its reference point's coordinate along the axis of the node being split.
-  struct KeyedFace {
-    double key;
-    std::uint32_t face;
-  };
   struct Search;
-  Box bounds(const KeyedFace* faces, std::uint32_t count) const;
-  void build(KeyedFace* faces, std::size_t node, std::uint32_t first, std::uint32_t count);
+  Box bounds(std::uint32_t first, std::uint32_t count) const;
+  void build(std::size_t node, std::uint32_t first, std::uint32_t count);
   void visit_face(std::uint32_t face, Search& s) const;
   void traverse(std::size_t node, std::uint32_t first, std::uint32_t count, Search& s) const;
 
