@@ -172,14 +172,16 @@ Lab2000hlTable Lab2000hlTable::load(const std::filesystem::path& dir) {
   t.a_hl_.assign(cells, 0.0);
   t.b_hl_.assign(cells, 0.0);
   std::vector<char> seen(cells, 0);
+  const std::filesystem::path a_path = dir / "RegularGridInit_0_0_1.txt";
+  const std::filesystem::path b_path = dir / "RegularGridInit_0_0_2.txt";
   for (std::size_t row = 0; row < cells; ++row) {
-    const int ai = grid_coordinate(a_coord[row], dir / "RegularGridInit_0_0_1.txt", row);
-    const int bi = grid_coordinate(b_coord[row], dir / "RegularGridInit_0_0_2.txt", row);
+    const int ai = grid_coordinate(a_coord[row], a_path, row);
+    const int bi = grid_coordinate(b_coord[row], b_path, row);
     const std::size_t cell = static_cast<std::size_t>(ai) * kAbSide + static_cast<std::size_t>(bi);
     if (seen[cell]) {
-      throw FormatError("LAB2000HL table " + (dir / "RegularGridInit_0_0_1.txt").string() +
-                        ": grid point (" + std::to_string(ai + kAbMin) + ", " +
-                        std::to_string(bi + kAbMin) + ") appears twice");
+      throw FormatError("LAB2000HL table " + a_path.string() + ": grid point (" +
+                        std::to_string(ai + kAbMin) + ", " + std::to_string(bi + kAbMin) +
+                        ") appears twice");
     }
     seen[cell] = 1;
     t.a_hl_[cell] = a_val[row];

@@ -1,7 +1,6 @@
 #include "curvature.h"
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -58,6 +57,22 @@ inline bool clipped_backwards(const Vec3& clipped, const Vec3& edge) {
   return dot(clipped, edge) < 0;
 }
 
+// sphere_clip_vector's test, inlined into the walks.
+__attribute__((always_inline)) inline bool clip(const Vec3& o, double r, const Vec3& p, Vec3& v) {
+  const Vec3 w = sub(p, o);
+  const double a = dot(v, v);
+  if (std::fabs(a) < kClipEpsilon) return false;
+  if (far_end_clearly_inside(w, v, a, r)) return false;  // what t >= 1 below returns
+  const double b = 2.0 * dot(v, w);
+  const double c = dot(w, w) - r * r;
+  const double delta = b * b - 4. * a * c;
+  if (delta < 0.) return true;  // numerical noise: treated as crossing, unclipped
+  const double t = (-b + std::sqrt(delta)) / (2.0 * a);
+  if (t >= 1.) return false;  // the far end is inside the sphere
+  v = scale(v, t);
+  return true;
+}
+
 // The curvature tensor of vertex v0 within the ball of radius r (MEPP2's walk, one radius).
 Tensor vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, CurvatureVariant variant,
                      WalkScratch& scratch) {
@@ -67,7 +82,7 @@ Tensor vertex_tensor(const HalfedgeMesh& m, std::uint32_t v0, double r, Curvatur
   walk_outward(m, v0, strict, scratch,
                [&](std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
                  const Vec3 edge = vec;
-                 const bool isect = sphere_clip_vector(o, r, m.positions[v], vec);
+                 const bool isect = clip(o, r, m.positions[v], vec);
                  if (variant == CurvatureVariant::kGeneric || isect) {
                    add_edge(m, k, vec, tensor, clipped_backwards(vec, edge));
                  }
@@ -95,7 +110,7 @@ void vertex_tensors(const HalfedgeMesh& m, std::uint32_t v0, const std::vector<d
       m, v0, generic, radii.size(), scratch,
       [&](std::size_t level, std::uint32_t v, std::uint32_t k, std::uint32_t w, Vec3 vec) {
         const Vec3 edge = vec;
-        const bool isect = sphere_clip_vector(o, radii[level], m.positions[v], vec);
+        const bool isect = clip(o, radii[level], m.positions[v], vec);
         if (!isect) scratch.enter(w);
         if (generic || isect) {
           add_edge(m, k, vec, isect ? crossing : inside, clipped_backwards(vec, edge));
@@ -120,7 +135,8 @@ double post_process(const double tensor[3][3], double maxdim) {
     for (int j = 0; j < 3; ++j) t(i, j) = tensor[i][j];
   }
   Eigen::Vector3d values;
-  if (t(0, 1) == 0 && t(0, 2) == 0 && t(1, 0) == 0 && t(1, 2) == 0 && t(2, 0) == 0 && t(2, 1) == 0) {
+  if (t(0, 1) == 0 && t(0, 2) == 0 && t(1, 0) == 0 && t(1, 2) == 0 && t(2, 0) == 0 &&
+      t(2, 1) == 0) {
     values = t.diagonal();
   } else {
     // Closed-form 3x3 eigenvalues (Eigen computeDirect): same values to ~1e-15 relative as
@@ -139,7 +155,9 @@ double post_process(const double tensor[3][3], double maxdim) {
 
 // A void tensor: MEPP2's eigen-solver fails on its NaN tensor and sets both principal
 // curvatures to 0 (SPEC-CMDM §MSDM2-degenerate).
-double curvature_of(const Tensor& t, double maxdim) { return t.valid ? post_process(t.t, maxdim) : 0.0; }
+double curvature_of(const Tensor& t, double maxdim) {
+  return t.valid ? post_process(t.t, maxdim) : 0.0;
+}
 
 }  // namespace
 
@@ -162,18 +180,7 @@ ShortEdges edges_under_clip_epsilon(const HalfedgeMesh& mesh) {
 }
 
 bool sphere_clip_vector(const Vec3& o, double r, const Vec3& p, Vec3& v) {
-  const Vec3 w = sub(p, o);
-  const double a = dot(v, v);
-  if (std::fabs(a) < kClipEpsilon) return false;
-  if (far_end_clearly_inside(w, v, a, r)) return false;  // what t >= 1 below returns
-  const double b = 2.0 * dot(v, w);
-  const double c = dot(w, w) - r * r;
-  const double delta = b * b - 4. * a * c;
-  if (delta < 0.) return true;  // numerical noise: treated as crossing, unclipped
-  const double t = (-b + std::sqrt(delta)) / (2.0 * a);
-  if (t >= 1.) return false;  // the far end is inside the sphere
-  v = scale(v, t);
-  return true;
+  return clip(o, r, p, v);
 }
 
 std::vector<double> processed_curvature(const HalfedgeMesh& mesh, double radius, double maxdim,
@@ -200,7 +207,8 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
     throw std::invalid_argument("processed_curvatures: the radii must not decrease");
   }
   const auto n = static_cast<std::int64_t>(mesh.positions.size());
-  std::vector<std::vector<double>> curvatures(radii.size(), std::vector<double>(mesh.positions.size()));
+  std::vector<std::vector<double>> curvatures(radii.size(),
+                                              std::vector<double>(mesh.positions.size()));
 #pragma omp parallel num_threads(threads)
   {
     MultiWalkScratch scratch;
@@ -208,7 +216,8 @@ std::vector<std::vector<double>> processed_curvatures(const HalfedgeMesh& mesh,
 #pragma omp for schedule(dynamic, 512)
     for (std::int64_t v = 0; v < n; ++v) {
       vertex_tensors(mesh, static_cast<std::uint32_t>(v), radii, variant, scratch, tensors);
-      for (std::size_t j = 0; j < radii.size(); ++j) curvatures[j][v] = curvature_of(tensors[j], maxdim);
+      for (std::size_t j = 0; j < radii.size(); ++j)
+        curvatures[j][v] = curvature_of(tensors[j], maxdim);
       if (progress) progress->add();
     }
   }

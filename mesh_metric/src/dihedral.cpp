@@ -87,18 +87,57 @@ double edge_beta(const DihedralInput& m, DegenerateEdges rule, std::uint32_t v, 
   return len > 0 ? repaired_beta(m, v, k, edge, len) : 0.0;
 }
 
+// The half-edge (v -> w) of the edge that k = (w -> v) runs along, with the faces swapped;
+// kNoTwin when there is none (a border, or several edges between v and w).
+constexpr std::uint32_t kNoTwin = 0xffffffffu;
+
+std::uint32_t twin(const RingFaces& r, std::uint32_t v, std::uint32_t k) {
+  const std::uint32_t w = r.source[k];
+  std::uint32_t found = kNoTwin;
+  for (std::uint32_t k2 = r.offsets[w]; k2 < r.offsets[w + 1]; ++k2) {
+    if (r.source[k2] != v || r.face[k2] != r.opposite_face[k] || r.opposite_face[k2] != r.face[k]) {
+      continue;
+    }
+    if (found != kNoTwin) return kNoTwin;
+    found = k2;
+  }
+  return found;
+}
+
 }  // namespace
 
+// An edge's two half-edges get the same angle wherever both faces have a normal: the twin's
+// vector is the exact negation of this one's and its faces are swapped, so (n2 x n1) . (-v) and
+// |-v| are the same numbers as (n1 x n2) . v and |v| bit for bit (the cosine test too), under
+// either rule. Each edge's angle is therefore computed once, on the half-edge entering its
+// smaller vertex, and copied onto the twin; only next to NaN normals (MEPP2's replacement walk
+// is not symmetric) and where the twin is not unique is the twin computed on its own.
 std::vector<double> dihedral_angles(const DihedralInput& m, DegenerateEdges rule, int threads) {
   const RingFaces& r = m.rings;
   std::vector<double> beta(r.source.size(), kNoContribution);
   const auto n = static_cast<std::int64_t>(r.offsets.size()) - 1;
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-  for (std::int64_t vi = 0; vi < n; ++vi) {
-    const auto v = static_cast<std::uint32_t>(vi);
-    for (std::uint32_t k = r.offsets[v]; k < r.offsets[v + 1]; ++k) {
-      if (r.face[k] == kNoFace || r.opposite_face[k] == kNoFace) continue;  // border edge
-      beta[k] = edge_beta(m, rule, v, k);
+  const auto interior = [&](std::uint32_t k) {
+    return r.face[k] != kNoFace && r.opposite_face[k] != kNoFace;  // else a border edge
+  };
+#pragma omp parallel num_threads(threads)
+  {
+#pragma omp for schedule(dynamic, 1024)
+    for (std::int64_t vi = 0; vi < n; ++vi) {
+      const auto v = static_cast<std::uint32_t>(vi);
+      for (std::uint32_t k = r.offsets[v]; k < r.offsets[v + 1]; ++k) {
+        if (interior(k) && v < r.source[k]) beta[k] = edge_beta(m, rule, v, k);
+      }
+    }
+#pragma omp for schedule(dynamic, 1024)
+    for (std::int64_t vi = 0; vi < n; ++vi) {
+      const auto v = static_cast<std::uint32_t>(vi);
+      for (std::uint32_t k = r.offsets[v]; k < r.offsets[v + 1]; ++k) {
+        if (!interior(k) || v < r.source[k]) continue;
+        const std::uint32_t k2 = v > r.source[k] ? twin(r, v, k) : kNoTwin;
+        const bool both_normals =
+            !has_nan(m.face_normals[r.face[k]]) && !has_nan(m.face_normals[r.opposite_face[k]]);
+        beta[k] = k2 != kNoTwin && both_normals ? beta[k2] : edge_beta(m, rule, v, k);
+      }
     }
   }
   return beta;

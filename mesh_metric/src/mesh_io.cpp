@@ -155,8 +155,35 @@ void read_off_vertex(std::string_view line, std::size_t line_no, const OffHeader
   }
 }
 
+// A triangle line "3 a b c" whose indices are plain decimal digits (at most 10, at most
+// 2^32 - 1), read without the general tokenizer: what read_off_face reads from such a line (the
+// rest of the line ignored, as there). False, with nothing read, for any other line.
+bool read_off_triangle(std::string_view line, RawMesh& m) {
+  const char* p = line.data();
+  const char* const end = p + line.size();
+  const auto skip_blanks = [&] {
+    while (p < end && detail::is_blank(*p)) ++p;
+  };
+  skip_blanks();
+  if (p + 1 >= end || p[0] != '3' || !detail::is_blank(p[1])) return false;
+  p += 1;
+  std::uint32_t idx[3];
+  for (std::uint32_t& out : idx) {
+    skip_blanks();
+    const char* const start = p;
+    std::uint64_t value = 0;
+    while (p < end && *p >= '0' && *p <= '9' && p - start < 10) value = value * 10 + (*p++ - '0');
+    if (p == start || (p < end && !detail::is_blank(*p)) || value > 0xffffffffu) return false;
+    out = static_cast<std::uint32_t>(value);
+  }
+  m.face_indices.insert(m.face_indices.end(), idx, idx + 3);
+  m.face_offsets.push_back(static_cast<std::uint32_t>(m.face_indices.size()));
+  return true;
+}
+
 void read_off_face(std::string_view line, std::size_t line_no, const std::string& file,
                    RawMesh& m) {
+  if (read_off_triangle(line, m)) return;
   Tokens tokens(line);
   std::string_view tok;
   long long n = 0;

@@ -26,7 +26,7 @@ constexpr std::size_t kConcurrentMatchFaces = 1000000;
 // A mesh ready for the metric, with what both directions need of it.
 struct PreparedMesh {
   HalfedgeMesh mesh;
-  std::vector<Lab> lab;       ///< LAB2000HL per vertex (empty when colour is not used)
+  std::vector<Lab> lab;  ///< LAB2000HL per vertex (empty when colour is not used)
   double box_size = 0;
   std::size_t input_vertices = 0;
 };
@@ -47,7 +47,8 @@ std::vector<Lab> vertex_lab2000hl(const HalfedgeMesh& m, const ColoredMesh& inpu
                       std::to_string(input.positions.size()) + " vertices");
   }
   std::vector<Lab> lab = to_lab2000hl(input.colors, table);
-  for (std::size_t v = lab.size(); v < m.input_vertex.size(); ++v) lab.push_back(lab[m.input_vertex[v]]);
+  for (std::size_t v = lab.size(); v < m.input_vertex.size(); ++v)
+    lab.push_back(lab[m.input_vertex[v]]);
   return lab;
 }
 
@@ -69,9 +70,8 @@ void warn_small_edges(HalfedgeMesh& m, const std::string& name, double box_size)
   if (edges.tiny == 0) return;
   // A mesh whose box is below this has its detail near MEPP2's absolute epsilon: scale it up.
   constexpr double kSmallBox = 1e-3;
-  const std::string remedy = box_size < kSmallBox
-                                 ? "scale both meshes up to a box of about 1"
-                                 : "weld near-coincident vertices";
+  const std::string remedy = box_size < kSmallBox ? "scale both meshes up to a box of about 1"
+                                                  : "weld near-coincident vertices";
   m.warnings.push_back(make_warning(name,
                                     std::to_string(edges.tiny) +
                                         " edges are shorter than 1.5e-8, MEPP2's absolute "
@@ -93,24 +93,34 @@ PreparedMesh prepare(const ColoredMesh& input, const std::string& name, const Mu
   return p;
 }
 
-// Values of the other mesh interpolated at each matched point.
-std::vector<double> interpolate_all(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& other, const std::vector<double>& values) {
-  std::vector<double> out(matches.size());
-  for (std::size_t i = 0; i < matches.size(); ++i) {
-    out[i] = interpolate(matches[i], other.triangles[matches[i].face], values);
+// Values of the other mesh interpolated at each matched point, for each of `fields` at once
+// (each value on its own: parallel).
+std::vector<std::vector<double>> interpolate_all(
+    const std::vector<SurfaceMatch>& matches, const HalfedgeMesh& other,
+    const std::vector<const std::vector<double>*>& fields, int threads) {
+  std::vector<std::vector<double>> out(fields.size(), std::vector<double>(matches.size()));
+  const auto n = static_cast<std::int64_t>(matches.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::int64_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < fields.size(); ++j) {
+      out[j][i] = interpolate(matches[i], other.triangles[matches[i].face], *fields[j]);
+    }
   }
   return out;
 }
 
 std::vector<Lab> interpolate_colors(const std::vector<SurfaceMatch>& matches,
-                                    const HalfedgeMesh& other, const std::vector<Lab>& colors) {
-  std::vector<double> channel(colors.size());
+                                    const HalfedgeMesh& other, const std::vector<Lab>& colors,
+                                    int threads) {
   std::vector<Lab> out(matches.size());
-  for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
-    for (std::size_t i = 0; i < colors.size(); ++i) channel[i] = colors[i].*c;
-    const auto values = interpolate_all(matches, other, channel);
-    for (std::size_t i = 0; i < out.size(); ++i) out[i].*c = values[i];
+  const auto n = static_cast<std::int64_t>(matches.size());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const SurfaceMatch& m = matches[i];
+    const Triangle& t = other.triangles[m.face];
+    for (double Lab::*c : {&Lab::L, &Lab::a, &Lab::b}) {
+      out[i].*c = interpolate(m, colors[t[0]].*c, colors[t[1]].*c, colors[t[2]].*c);
+    }
   }
   return out;
 }
@@ -197,22 +207,21 @@ void accumulate_scales(const std::vector<MatchedFields>& levels,
 
 // One direction: the features of `first`'s vertices matched on `second`, summed over scales.
 std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const PreparedMesh& other,
-                                          const MultiscaleDefinition& def, int scales,
-                                          int threads, CurvatureCache& curvatures,
-                                          SurfaceMatches matching, const std::string& label,
-                                          ProgressSteps& progress) {
+                                          const MultiscaleDefinition& def, int scales, int threads,
+                                          CurvatureCache& curvatures, SurfaceMatches matching,
+                                          const std::string& label, ProgressSteps& progress) {
   const auto& [matched_point, matches] = matching;
   std::vector<Lab> lab_match;
-  if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab);
+  if (def.uses_color) lab_match = interpolate_colors(matches, other.mesh, other.lab, threads);
   const double maxdim = iterated.box_size;
   std::vector<FeatureVector> sums(iterated.mesh.positions.size(), FeatureVector{});
   double rc = def.first_radius;  // accumulated like MEPP2's `radius_curvature +=`
   for (int first = 0; first < scales; first += kScalesPerWalk) {
     const int end = std::min(scales, first + kScalesPerWalk);
     // "scales 1-3", or "scales 9-16 of 20" when one walk cannot serve them all.
-    std::string which = end - first == 1 ? "scale " + std::to_string(end)
-                                         : "scales " + std::to_string(first + 1) + "-" +
-                                               std::to_string(end);
+    std::string which = end - first == 1
+                            ? "scale " + std::to_string(end)
+                            : "scales " + std::to_string(first + 1) + "-" + std::to_string(end);
     if (end - first < scales) which += " of " + std::to_string(scales);
     std::vector<double> radii;
     std::vector<WalkParameters> walks;
@@ -226,10 +235,8 @@ std::vector<FeatureVector> direction_sums(const PreparedMesh& iterated, const Pr
     LoopProgress curvature_done(&progress,
                                 other.mesh.positions.size() + iterated.mesh.positions.size());
     // The other mesh's first: only their values at the matched points are kept.
-    std::vector<std::vector<double>> curv_match;
-    for (const auto* c : curvatures.get(other.mesh, radii, maxdim, &curvature_done)) {
-      curv_match.push_back(interpolate_all(matches, other.mesh, *c));
-    }
+    std::vector<std::vector<double>> curv_match = interpolate_all(
+        matches, other.mesh, curvatures.get(other.mesh, radii, maxdim, &curvature_done), threads);
     curvatures.release(other.mesh);
     const auto curv1 = curvatures.get(iterated.mesh, radii, maxdim, &curvature_done);
     curvature_done.finish();
@@ -262,8 +269,8 @@ DirectionResult run_direction(const PreparedMesh& iterated, const PreparedMesh& 
     progress.begin(label + ": closest points");
     matching = match(iterated, other, def, threads);
   }
-  auto sums = direction_sums(iterated, other, def, scales, threads, curvatures, std::move(*matching),
-                             label, progress);
+  auto sums = direction_sums(iterated, other, def, scales, threads, curvatures,
+                             std::move(*matching), label, progress);
   // Duplicated (non-manifold) vertices come after the input's: report the input's vertices.
   pool(sums, scales, result);
   if (result.per_element.size() > iterated.input_vertices) {
@@ -275,8 +282,8 @@ DirectionResult run_direction(const PreparedMesh& iterated, const PreparedMesh& 
 }  // namespace
 
 MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& distorted,
-                                const MultiscaleDefinition& def, const MultiscaleRun& run,
-                                const DirectionPooling& pool) {
+                            const MultiscaleDefinition& def, const MultiscaleRun& run,
+                            const DirectionPooling& pool) {
   if (run.scales < 1 || run.scales > 100) {
     throw std::invalid_argument(std::string(def.name) +
                                 ": the number of scales must be between 1 and 100");
@@ -293,29 +300,49 @@ MetricResult run_multiscale(const ColoredMesh& reference, const ColoredMesh& dis
   const int threads = run.threads > 0 ? run.threads : omp_get_max_threads();
   const bool concurrent = threads >= 2;
   const int per_task = concurrent ? threads / 2 : 1;
-  // The two meshes are prepared concurrently (CGAL's Surface_mesh construction is sequential).
-  const auto prepare_ref = [&] { return prepare(reference, "reference mesh", run, def, per_task); };
-  std::future<PreparedMesh> ref_task =
+  // The two meshes are prepared concurrently. When both directions are needed and the meshes
+  // are small, each task goes on to build the closest-point structures of its mesh (the target
+  // of the other direction), and both directions' queries then share the threads in one loop;
+  // large meshes are matched one direction at a time, later, to keep the memory peak low.
+  PreparedMesh ref, dist;
+  std::optional<SurfaceTarget> ref_target, dist_target;
+  const bool match_early =
+      concurrent && both &&
+      reference.triangles.size() + distorted.triangles.size() <= kConcurrentMatchFaces;
+  const auto prepare_ref = [&] {
+    ref = prepare(reference, "reference mesh", run, def, per_task);
+    if (match_early) ref_target.emplace(ref.mesh, def.anchor, per_task);
+  };
+  std::future<void> ref_task =
       std::async(concurrent ? std::launch::async : std::launch::deferred, prepare_ref);
-  const PreparedMesh dist = prepare(distorted, "distorted mesh", run, def, per_task);
-  const PreparedMesh ref = ref_task.get();
+  {
+    // A running reference task is waited for even when this side throws (it writes into `ref`).
+    struct Join {
+      std::future<void>& task;
+      bool running;
+      ~Join() {
+        if (running && task.valid()) task.wait();
+      }
+    } join{ref_task, concurrent};
+    dist = prepare(distorted, "distorted mesh", run, def, per_task);
+    if (match_early) dist_target.emplace(dist.mesh, def.anchor, per_task);
+  }
+  ref_task.get();
   if (run.inputs_done) run.inputs_done();  // both meshes detached: the inputs are not read below
   MetricResult result;
   for (const auto* m : {&ref.mesh, &dist.mesh}) {
     result.warnings.insert(result.warnings.end(), m->warnings.begin(), m->warnings.end());
   }
-  CurvatureCache curvatures(def.curvature, both && ref.box_size == dist.box_size,
-                            threads);
-  // Closest-point matching builds one AABB tree per direction, sequentially inside CGAL. When
-  // both directions are needed and the trees are small, both are matched concurrently up front;
-  // large meshes are matched one direction at a time to keep the memory peak low.
+  CurvatureCache curvatures(def.curvature, both && ref.box_size == dist.box_size, threads);
   std::optional<SurfaceMatches> d2r_matches, r2d_matches;
-  if (concurrent && both &&
-      ref.mesh.triangles.size() + dist.mesh.triangles.size() <= kConcurrentMatchFaces) {
+  if (match_early) {
     progress.begin("closest points, both directions", 2);
-    auto r2d = std::async(std::launch::async, [&] { return match(ref, dist, def, per_task); });
-    d2r_matches = match(dist, ref, def, per_task);
-    r2d_matches = r2d.get();
+    auto matches = match_to_surfaces(
+        {{dist.mesh.positions, &*ref_target}, {ref.mesh.positions, &*dist_target}}, threads);
+    ref_target.reset();
+    dist_target.reset();
+    d2r_matches = std::move(matches[0]);
+    r2d_matches = std::move(matches[1]);
   }
   if (run.direction != Direction::kRefToDist) {
     result.dist_to_ref = run_direction(dist, ref, def, run.scales, threads, curvatures, pool,

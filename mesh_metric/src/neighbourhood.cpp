@@ -48,8 +48,9 @@ Sample vertex_sample(const MatchedFields& f, std::uint32_t v) {
 // differ from the two-length ones in their last bits; both the one-walk and the per-radius walk
 // take t so, and the scores stay within 1e-13 relative (residues of an exact 0, on identical
 // geometry, within 1e-16 absolute).
-Sample crossing_sample(const MatchedFields& f, std::uint32_t v, std::uint32_t w,
-                       const Vec3& clipped, double t) {
+__attribute__((always_inline)) inline Sample crossing_sample(const MatchedFields& f,
+                                                             std::uint32_t v, std::uint32_t w,
+                                                             const Vec3& clipped, double t) {
   const auto& q = *f.matched_point;
   Sample s;
   s.point1 = add(f.mesh->positions[v], clipped);
@@ -116,8 +117,9 @@ void finish_colours(NeighbourhoodSamples& out) {
 // into the Gaussian weights of one level in a vectorised pass. MEPP2 takes the distance's square
 // root and squares it again in the weight: the same number to rounding, without a square root
 // per sample and side (scores within 1e-13 relative).
-void push_sample(const Sample& s, const Vec3& center1, const Vec3& center2, bool with_color,
-                 NeighbourhoodSamples& out) {
+__attribute__((always_inline)) inline void push_sample(const Sample& s, const Vec3& center1,
+                                                       const Vec3& center2, bool with_color,
+                                                       NeighbourhoodSamples& out) {
   out.w1.push_back(squared_distance(s.point1, center1));
   out.w2.push_back(squared_distance(s.point2, center2));
   out.curv1.push_back(s.curv1);
@@ -169,12 +171,12 @@ void to_weights(NeighbourhoodSamples& out, double sigma) {
 
 }  // namespace
 
-bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v) {
-  double t;
-  return sphere_clip_vector_cmdm(o, r, p, v, t);
-}
+namespace {
 
-bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v, double& t_out) {
+// sphere_clip_vector_cmdm's test, inlined into the walks (called out of line, the test and its
+// call took about a fifth of the neighbourhood walk's time).
+__attribute__((always_inline)) inline bool clip_cmdm(const Vec3& o, double r, const Vec3& p,
+                                                     Vec3& v, double& t_out) {
   t_out = 1.0;
   const Vec3 w = sub(p, o);
   const double a = dot(v, v);
@@ -193,6 +195,17 @@ bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v, do
   return true;
 }
 
+}  // namespace
+
+bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v) {
+  double t;
+  return clip_cmdm(o, r, p, v, t);
+}
+
+bool sphere_clip_vector_cmdm(const Vec3& o, double r, const Vec3& p, Vec3& v, double& t_out) {
+  return clip_cmdm(o, r, p, v, t_out);
+}
+
 void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkParameters& walk,
                           WalkScratch& scratch, NeighbourhoodSamples& out) {
   const HalfedgeMesh& m = *f.mesh;
@@ -205,7 +218,7 @@ void sample_neighbourhood(const MatchedFields& f, std::uint32_t v0, const WalkPa
                [&](std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
                  Vec3 vec = edge;
                  double t;
-                 const bool isect = sphere_clip_vector_cmdm(o, walk.radius, m.positions[v], vec, t);
+                 const bool isect = clip_cmdm(o, walk.radius, m.positions[v], vec, t);
                  if (!isect && !scratch.enter(w)) return;  // inside and already sampled
                  // A zero-length crossing edge gives the vertex sample.
                  const Sample s = (isect && dot(edge, edge) != 0) ? crossing_sample(f, v, w, vec, t)
@@ -232,7 +245,7 @@ void sample_neighbourhoods(const std::vector<MatchedFields>& levels, std::uint32
       [&](std::size_t level, std::uint32_t v, std::uint32_t, std::uint32_t w, const Vec3& edge) {
         Vec3 vec = edge;
         double t;
-        if (!sphere_clip_vector_cmdm(o, walks[level].radius, m.positions[v], vec, t)) {
+        if (!clip_cmdm(o, walks[level].radius, m.positions[v], vec, t)) {
           if (scratch.enter(w)) push_vertex_levels(levels, level, w, o, q0, with_color, out);
           return false;
         }

@@ -287,44 +287,75 @@ TreeFaces tree_faces(const HalfedgeMesh& m) {
 
 }  // namespace
 
+// What a target surface needs for closest-point queries: its search hints, the faces its tree
+// holds and CGAL's AABB tree over them.
+struct SurfaceTarget::Impl {
+  Impl(const HalfedgeMesh& m, HeronAnchor a, int threads)
+      : mesh(m),
+        anchor(a),
+        hints(m, a, threads),
+        faces(tree_faces(m)),
+        tree(m.positions,
+             faces.all ? m.triangles
+                       : ArrayView<Triangle>{faces.triangles.data(), faces.triangles.size()},
+             threads) {}
+
+  const HalfedgeMesh& mesh;
+  HeronAnchor anchor;
+  SearchHints hints;
+  TreeFaces faces;
+  FaceBoxTree tree;
+};
+
+SurfaceTarget::SurfaceTarget(const HalfedgeMesh& target, HeronAnchor anchor, int threads)
+    : impl_(std::make_unique<Impl>(target, anchor, threads)) {}
+
+SurfaceTarget::~SurfaceTarget() = default;
+
+void SurfaceTarget::match(const Vec3& v, Vec3& point, SurfaceMatch& m) const {
+  const Impl& t = *impl_;
+  ClosestPoint c;
+  if (t.faces.all) {
+    c = t.tree.closest(v, t.hints(v));
+  } else {
+    ClosestPoint hint = t.hints(v);
+    hint.face = t.faces.tree_face[hint.face];
+    c = t.tree.closest(v, hint);
+    c.face = t.faces.mesh_face[c.face];
+  }
+  point = c.point;
+  m.face = c.face;
+  m.areas = heron_areas(t.mesh, m.face, t.anchor == HeronAnchor::kProjectedPoint ? c.point : v);
+}
+
 SurfaceMatches match_to_surface(const ArrayView<Vec3>& queries, const HalfedgeMesh& target,
                                 HeronAnchor anchor, int threads) {
-  const SearchHints hints(target, anchor, threads);
-  const TreeFaces faces = tree_faces(target);
-  const FaceBoxTree tree(target.positions,
-                         faces.all
-                             ? target.triangles
-                             : ArrayView<Triangle>{faces.triangles.data(), faces.triangles.size()},
-                         threads);
-  SurfaceMatches out;
-  out.points.resize(queries.size());
-  out.matches.resize(queries.size());
-  const auto n = static_cast<std::int64_t>(queries.size());
+  const SurfaceTarget surface(target, anchor, threads);
+  return std::move(match_to_surfaces({{queries, &surface}}, threads).front());
+}
+
+std::vector<SurfaceMatches> match_to_surfaces(const std::vector<SurfaceQueries>& sets,
+                                              int threads) {
+  std::vector<SurfaceMatches> out(sets.size());
+  std::vector<std::int64_t> start(sets.size() + 1, 0);  // each set's first index in the loop
+  for (std::size_t s = 0; s < sets.size(); ++s) {
+    out[s].points.resize(sets[s].queries.size());
+    out[s].matches.resize(sets[s].queries.size());
+    start[s + 1] = start[s] + static_cast<std::int64_t>(sets[s].queries.size());
+  }
+  const std::int64_t n = start.back();
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
   for (std::int64_t i = 0; i < n; ++i) {
-    const Vec3& v = queries[std::size_t(i)];
-    ClosestPoint c;
-    if (faces.all) {
-      c = tree.closest(v, hints(v));
-    } else {
-      ClosestPoint hint = hints(v);
-      hint.face = faces.tree_face[hint.face];
-      c = tree.closest(v, hint);
-      c.face = faces.mesh_face[c.face];
-    }
-    out.points[std::size_t(i)] = c.point;
-    SurfaceMatch& m = out.matches[std::size_t(i)];
-    m.face = c.face;
-    m.areas = heron_areas(target, m.face, anchor == HeronAnchor::kProjectedPoint ? c.point : v);
+    const std::size_t s = static_cast<std::size_t>(std::upper_bound(start.begin(), start.end(), i) -
+                                                   start.begin() - 1);
+    const auto j = static_cast<std::size_t>(i - start[s]);
+    sets[s].target->match(sets[s].queries[j], out[s].points[j], out[s].matches[j]);
   }
   return out;
 }
 
 double interpolate(const SurfaceMatch& m, const Triangle& t, const std::vector<double>& values) {
-  const auto& a = m.areas;
-  const double sum = a[0] + a[1] + a[2];
-  if (sum > 0) return (a[0] * values[t[0]] + a[1] * values[t[1]] + a[2] * values[t[2]]) / sum;
-  return (values[t[0]] + values[t[1]] + values[t[2]]) / 3;
+  return interpolate(m, values[t[0]], values[t[1]], values[t[2]]);
 }
 
 }  // namespace qm3d::mesh::detail

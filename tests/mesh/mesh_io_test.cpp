@@ -73,6 +73,30 @@ TEST_F(MeshFiles, OffWithRgbaAndCommentsAndCountsOnHeaderLine) {
   EXPECT_EQ(n.mesh.colors[2].b, 1.0);
 }
 
+// Triangle lines take a shortcut past the tokenizer (mesh_io.cpp read_off_triangle): the same
+// faces as the general path for every spelling it accepts, and the general path's errors for
+// the others.
+TEST_F(MeshFiles, OffTriangleLinesReadAlikeWhateverTheirSpelling) {
+  const std::string head = "COFF\n4 6 0\n0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n0 0 1 1 1 1\n";
+  const MeshFile m = read_mesh(
+      write("t.off", head + "3 0 1 2\n \t3\t0002 1 3  \n+3 0 2 3\n03 1 2 3\n3 0 3 1 255 0 0\n"
+                            "4 0 1 2 3\n"));
+  const std::vector<Triangle> expected = {{0, 1, 2}, {2, 1, 3}, {0, 2, 3}, {1, 2, 3},
+                                          {0, 3, 1}, {0, 1, 2}, {0, 2, 3}};
+  EXPECT_EQ(m.mesh.triangles, expected);
+  const std::string big = error_of(write("b.off", head + "3 0 1 4294967296\n"));
+  EXPECT_NE(big.find("line 7: bad face index '4294967296'"), std::string::npos) << big;
+  const std::string sign = error_of(write("s.off", head + "3 0 1 -2\n"));
+  EXPECT_NE(sign.find("line 7: bad face index '-2'"), std::string::npos) << sign;
+  const std::string junk = error_of(write("j.off", head + "3 0 1 2x\n"));
+  EXPECT_NE(junk.find("line 7: bad face index '2x'"), std::string::npos) << junk;
+  const std::string few = error_of(write("f.off", head + "3 0 1\n"));
+  EXPECT_NE(few.find("line 7: face has fewer indices than its count"), std::string::npos) << few;
+  const std::string range = error_of(
+      write("r.off", "COFF\n3 1 0\n0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n3 0 1 00000000004\n"));
+  EXPECT_NE(range.find("refers to vertex 4"), std::string::npos) << range;
+}
+
 TEST_F(MeshFiles, SameDataInObjOffPlyGivesTheSameMesh) {
   const fs::path dir = test::reference_dir() / "cmdm";
   const MeshFile off = read_mesh(dir / "blob4_ref.off");
