@@ -156,20 +156,30 @@ std::size_t CandidateSet::select_scalar(double bound2, std::vector<Neighbour>& o
   return count;
 }
 
-// The candidates with d2 < bound2 (kStrict) or d2 <= bound2, in tree order: by the vector
-// path where the processor has AVX2 (the same list, bit for bit), else the scalar one.
+// The candidates with d2 < bound2 (kStrict) or d2 <= bound2, in tree order, into selected_: by
+// the vector path where the processor has AVX2 (the same list, bit for bit), else the scalar one.
 template <bool kStrict>
-void CandidateSet::select(const Vec3& q, double bound2, std::vector<Neighbour>& out) {
+CandidateSet::Selection CandidateSet::select(const Vec3& q, double bound2) {
 #if defined(QM3D_CANDIDATES_AVX2)
   if (cpu_has_avx2()) {
     const std::size_t m = select_avx2<kStrict>(q, x_.data(), y_.data(), z_.data(), index_.data(),
                                                index_.size(), bound2, selected_.data());
-    out.assign(selected_.begin(), selected_.begin() + static_cast<std::ptrdiff_t>(m));
-    return;
+    return Selection{selected_.data(), m};
   }
 #endif
   distances(q);
-  select_scalar<kStrict>(bound2, out);
+  const std::size_t m = select_scalar<kStrict>(bound2, selected_);
+  return Selection{selected_.data(), m};
+}
+
+template <bool kStrict>
+void CandidateSet::select(const Vec3& q, double bound2, std::vector<Neighbour>& out) {
+  const Selection s = select<kStrict>(q, bound2);
+  out.assign(s.data, s.data + s.count);
+}
+
+CandidateSet::Selection CandidateSet::radius(const Vec3& q, double radius2) {
+  return select<true>(q, radius2);
 }
 
 void CandidateSet::radius(const Vec3& q, double radius2, std::vector<Neighbour>& out) {

@@ -30,6 +30,16 @@ class CandidateSet {
   /// radius2.
   void radius(const Vec3& q, double radius2, std::vector<Neighbour>& out);
 
+  /// A list held by the set: valid until its next query or gather.
+  struct Selection {
+    const Neighbour* data = nullptr;
+    std::size_t count = 0;
+    std::size_t size() const { return count; }
+    const Neighbour& operator[](std::size_t i) const { return data[i]; }
+  };
+  /// radius() without copying the list out.
+  Selection radius(const Vec3& q, double radius2);
+
   /// What knn found besides its list.
   struct Knn {
     double kth_distance2 = 0;  ///< the k-th nearest squared distance (0 when k = 0)
@@ -47,6 +57,8 @@ class CandidateSet {
   std::size_t size() const { return size_; }
 
  private:
+  template <bool kStrict>
+  Selection select(const Vec3& q, double bound2);
   template <bool kStrict>
   void select(const Vec3& q, double bound2, std::vector<Neighbour>& out);
   void distances(const Vec3& q);

@@ -24,9 +24,17 @@
 namespace qm3d::pointcloud::detail {
 namespace {
 
-/// Points per query batch (consecutive k-d tree leaves searched with one candidate gather):
-/// batches of up to 16 points were about 3% faster than single leaves on the 1M sphere.
-constexpr std::uint32_t kBatchPoints = 16;
+/// Points per query batch (consecutive k-d tree leaves searched with one candidate gather), and
+/// how far a batch's box may grow when a leaf joins it: at most kBatchGrowth times the larger
+/// side of the two boxes. Consecutive leaves are usually neighbours, but where the tree order
+/// crosses a split plane high in the tree the next leaf can lie across the cloud: merged
+/// regardless (the previous rule), a few batches had boxes of tens of thousands of candidates,
+/// filtered by every one of their points. With the growth bound, batches of up to 32 points
+/// (16.8 on average) had half the candidates per point of 16-point greedy batches (12.7), and the
+/// gathers and filters took about 30% less time on the 1M sphere. Batches only decide how much
+/// is searched: every list is exact, so they never change a value.
+constexpr std::uint32_t kBatchPoints = 32;
+constexpr double kBatchGrowth = 2.0;
 /// Query batches per dynamic-schedule chunk: large enough to keep a thread's queries spatially
 /// coherent, small enough to balance clouds of uneven density.
 constexpr std::int64_t kBatchesPerChunk = 16;
@@ -307,17 +315,40 @@ void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
   }
 }
 
-/// Consecutive leaves of `tree` merged into query batches of at most kBatchPoints points (a
-/// leaf holds at most 10, often 5 or 6): one candidate gather then serves about a dozen
-/// neighbouring queries. Tree-index ranges [first, last), in tree order.
+/// Largest side of a box.
+double longest_side(const Box& b) {
+  return std::max(b.hi[0] - b.lo[0], std::max(b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]));
+}
+
+Box merged(const Box& a, const Box& b) {
+  Box m = a;
+  for (int k = 0; k < 3; ++k) {
+    m.lo[k] = std::min(a.lo[k], b.lo[k]);
+    m.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  return m;
+}
+
+/// Consecutive leaves of `tree` merged into query batches of at most kBatchPoints points whose
+/// box grows by at most kBatchGrowth with each leaf (a leaf holds at most 10 points, often 5 or
+/// 6): one candidate gather then serves a dozen or more neighbouring queries. Tree-index ranges
+/// [first, last), in tree order.
 std::vector<std::array<std::uint32_t, 2>> query_batches(const KdTree& tree) {
   std::vector<std::array<std::uint32_t, 2>> batches;
+  Box box;  // of the last batch
   for (const auto& leaf : tree.leaves()) {
+    const Box leaf_box = box_of(tree.points(), leaf[0], leaf[1]);
     if (!batches.empty() && leaf[1] - batches.back()[0] <= kBatchPoints) {
-      batches.back()[1] = leaf[1];
-    } else {
-      batches.push_back(leaf);
+      const Box both = merged(box, leaf_box);
+      if (longest_side(both) <=
+          kBatchGrowth * std::max(longest_side(box), longest_side(leaf_box))) {
+        batches.back()[1] = leaf[1];
+        box = both;
+        continue;
+      }
     }
+    batches.push_back(leaf);
+    box = leaf_box;
   }
   return batches;
 }
@@ -354,7 +385,7 @@ PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& ra
 
 struct Stage2Scratch {
   CandidateSet candidates;
-  std::vector<Neighbour> within;
+  CandidateSet::Selection within;  ///< p's statistics neighbourhood, held by `candidates`
   NeighbourhoodSamples samples;
 };
 
@@ -409,7 +440,7 @@ void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& itera
   s.candidates.gather(iterated_tree, box_of(iterated_tree.points(), batch[0], batch[1]),
                       radii.statistics2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
-    s.candidates.radius(iterated_tree.points()[i], radii.statistics2, s.within);
+    s.within = s.candidates.radius(iterated_tree.points()[i], radii.statistics2);
     gather_samples(i, d, radii, s);
     const std::uint32_t input = iterated_tree.input_index()[i];
     features[input] = local_features_and_similarities(s.samples, kPcqmConventions);
