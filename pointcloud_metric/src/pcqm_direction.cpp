@@ -38,6 +38,8 @@ constexpr double kBatchGrowth = 2.0;
 /// Query batches per dynamic-schedule chunk: large enough to keep a thread's queries spatially
 /// coherent, small enough to balance clouds of uneven density.
 constexpr std::int64_t kBatchesPerChunk = 16;
+/// Iterations ahead at which TreeColours announces its random reads of the input colours.
+constexpr std::int64_t kColourPrefetch = 16;
 /// Relative slack on the kNN reach of a batch, covering the rounding of its computation.
 constexpr double kReachSlack = 1.0 + 1e-9;
 
@@ -106,6 +108,9 @@ class TreeColours {
     bool all_bytes = true;
 #pragma omp parallel for num_threads(thread_count(threads)) reduction(&& : all_bytes)
     for (std::int64_t i = 0; i < n; ++i) {
+      // Random reads of a 24 MB array: announced a few iterations ahead.
+      if (i + kColourPrefetch < n)
+        __builtin_prefetch(&colors[order[std::size_t(i + kColourPrefetch)]]);
       all_bytes = to_bytes(colors[order[std::size_t(i)]], bytes_[std::size_t(i)]) && all_bytes;
     }
     if (all_bytes) return;
@@ -117,16 +122,27 @@ class TreeColours {
   Rgb operator[](std::size_t i) const {
     if (!exact_.empty()) return exact_[i];
     const auto& b = bytes_[i];
-    return Rgb{b[0] / 255.0, b[1] / 255.0, b[2] / 255.0};
+    const auto& unit = unit_values();
+    return Rgb{unit[b[0]], unit[b[1]], unit[b[2]]};
   }
 
  private:
+  /// k / 255.0 for every byte k (the division each lookup would make).
+  static const std::array<double, 256>& unit_values() {
+    static const std::array<double, 256> values = [] {
+      std::array<double, 256> v{};
+      for (int k = 0; k < 256; ++k) v[std::size_t(k)] = k / 255.0;
+      return v;
+    }();
+    return values;
+  }
   static bool to_bytes(const Rgb& c, std::array<std::uint8_t, 3>& out) {
     const double channels[3] = {c.r, c.g, c.b};
+    const auto& unit = unit_values();
     for (int k = 0; k < 3; ++k) {
       if (!(channels[k] >= 0.0 && channels[k] <= 1.0)) return false;
       const int v = static_cast<int>(channels[k] * 255.0 + 0.5);
-      if (v / 255.0 != channels[k]) return false;
+      if (unit[std::size_t(v)] != channels[k]) return false;
       out[k] = static_cast<std::uint8_t>(v);
     }
     return true;
