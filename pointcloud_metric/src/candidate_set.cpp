@@ -16,6 +16,9 @@ namespace {
 
 /// Candidates per vector step (AVX2: four doubles); the arrays are padded to a multiple of it.
 constexpr std::size_t kLanes = 4;
+/// knn() sorts lists up to this size whole (sort_by_distance's branch-free path for short lists
+/// is faster than selecting the k + 1 first there); longer ones are selected first.
+constexpr std::size_t kSortWhole = 32;
 
 #if defined(QM3D_CANDIDATES_AVX2)
 static_assert(sizeof(Neighbour) == 16 && offsetof(Neighbour, distance2) == 0 &&
@@ -188,14 +191,27 @@ void CandidateSet::radius(const Vec3& q, double radius2, std::vector<Neighbour>&
 
 CandidateSet::Knn CandidateSet::knn(const Vec3& q, std::size_t k, double knn_bound2,
                                     std::vector<Neighbour>& nearest) {
-  select<false>(q, knn_bound2, survivors_);
-  sort_by_distance(survivors_);
+  select<false>(q, knn_bound2, survivors_);  // d2 <= bound: no NaN distance survives
   k = std::min(k, survivors_.size());
-  nearest.assign(survivors_.begin(), survivors_.begin() + long(k));
   Knn out;
+  nearest.clear();
   if (k == 0) return out;
-  out.kth_distance2 = nearest.back().distance2;
-  out.tie_at_kth = survivors_.size() > k && survivors_[k].distance2 == out.kth_distance2;
+  // The k + 1 first in (distance, index) order: the list, and whether the next one ties the k-th.
+  // Selected in linear time, then sorted: the order is total (distinct indices, no NaN), so they
+  // are the first k + 1 entries of the fully sorted list, in its order.
+  const std::size_t keep = std::min(k + 1, survivors_.size());
+  if (survivors_.size() <= kSortWhole) {
+    sort_by_distance(survivors_);
+    nearest.assign(survivors_.begin(), survivors_.begin() + std::ptrdiff_t(keep));
+  } else {
+    std::nth_element(survivors_.begin(), survivors_.begin() + std::ptrdiff_t(keep - 1),
+                     survivors_.end(), NeighbourOrder{});
+    nearest.assign(survivors_.begin(), survivors_.begin() + std::ptrdiff_t(keep));
+    sort_by_distance(nearest);
+  }
+  out.kth_distance2 = nearest[k - 1].distance2;
+  out.tie_at_kth = keep > k && nearest[k].distance2 == out.kth_distance2;
+  nearest.resize(k);
   return out;
 }
 

@@ -33,17 +33,13 @@ constexpr double kSpanEps = 0.00001;
 /// copies would stay resident in the building thread's heap.
 std::size_t expected_nodes(std::size_t points) { return points / 2 + 1; }
 
-bool closer(const Neighbour& a, const Neighbour& b) {
-  return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.index < b.index);
-}
-
 #if defined(QM3D_KD_TREE_AVX2)
 /// Lists up to this size are sorted by counting ranks (quadratic, but branch-free: about twice
 /// as fast as the insertion sort on PCQM's lists of 15 to 20 neighbours).
 constexpr std::size_t kRankSortMax = 32;
 
-// Sorts by (distance, index) by placing each entry at its rank, the number of entries closer()
-// puts before it, counted four at a time. The order closer() defines is total on a list without
+// Sorts by (distance, index) by placing each entry at its rank, the number of entries
+// NeighbourOrder puts before it, counted four at a time. That order is total on a list without
 // NaN distances and repeated (distance, index) pairs, so the result is the one every correct sort
 // gives; false (the list untouched) when the ranks are not a permutation (such a list).
 __attribute__((target("avx2"))) bool sort_by_rank_avx2(std::vector<Neighbour>& v) {
@@ -94,6 +90,7 @@ void sort_by_distance(std::vector<Neighbour>& neighbours) {
     return;
   }
 #endif
+  const NeighbourOrder closer;
   if (neighbours.size() > kInsertionSortMax) {
     std::sort(neighbours.begin(), neighbours.end(), closer);
     return;
