@@ -64,9 +64,12 @@ double point_distance(const Vec3& a, const Vec3& b) {
 }
 
 /// Stage-1 values of each point of the iterated cloud, in its tree order. Stage 1 writes every
-/// element (in parallel: no serial zeroing pass), `underdetermined` by bits.
+/// element (in parallel: no serial zeroing pass), `underdetermined` by bits, and `correspondence`
+/// only where it is not the point itself unless the diagnostics want them all (correspondence_of
+/// reads it): on a colour-only distortion none is written, and its 24 bytes per point are never
+/// faulted in.
 struct PointData {
-  explicit PointData(std::size_t n, bool diagnostics) {
+  explicit PointData(std::size_t n, bool diagnostics) : all_correspondences(diagnostics) {
     correspondence.resize(n);
     correspondence_is_point.resize(n);
     for (auto* v : {&curvature_iterated, &curvature_other, &lightness_iterated, &lightness_other,
@@ -81,8 +84,9 @@ struct PointData {
       count_radius_iterated.resize(n);
     }
   }
+  bool all_correspondences;
   LargeArray<Vec3> correspondence;
-  LargeArray<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
+  LargeArray<std::uint8_t> correspondence_is_point;  ///< p-hat == p (compared with ==)
   LargeArray<double> curvature_iterated, curvature_other;
   LargeArray<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other,
       hue_difference;
@@ -302,9 +306,12 @@ void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, cons
                   const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                   Stage1Scratch& s, PointData& out) {
   const Vec3& p = c.iterated_tree.points()[i];
+  Vec3 correspondence;
   const std::uint32_t nearest =
-      match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
-  out.correspondence_is_point[i] = out.correspondence[i] == p;
+      match(batch, i, c, params, radii, s, correspondence, out.underdetermined[i]);
+  const bool is_point = correspondence == p;
+  out.correspondence_is_point[i] = is_point;
+  if (!is_point || out.all_correspondences) out.correspondence[i] = correspondence;
   const std::vector<Neighbour>& within_iterated =
       c.same_positions ? s.within_other : s.within_iterated;
   if (!c.same_positions) {
@@ -405,10 +412,18 @@ struct Stage2Scratch {
   NeighbourhoodSamples samples;
 };
 
+/// p-hat of the point of tree index i: the point itself or the stored correspondence (PointData).
+/// Where `==` found them equal they differ at most in the sign of a zero, which no distance
+/// sees.
+const Vec3& correspondence_of(const PointData& d, const KdTree& tree, std::size_t i) {
+  return d.correspondence_is_point[i] != 0 ? tree.points()[i] : d.correspondence[i];
+}
+
 /// Paired samples of p's statistics neighbourhood N(p) (R's points within rx r): w1 from
 /// |p - q_j|, w2 from |p-hat - q-hat_j| (equal to w1 when both correspondences are the points
 /// themselves); R side = index 1, D side = index 2 (compute_statistics).
-void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage2Scratch& s) {
+void gather_samples(std::size_t i, const KdTree& tree, const PointData& d, const Radii& radii,
+                    Stage2Scratch& s) {
   NeighbourhoodSamples& out = s.samples;
   const std::size_t n = s.within.size();
   for (auto* v : {&out.w1, &out.w2, &out.curv1, &out.curv2, &out.light1, &out.light2, &out.chroma1,
@@ -425,7 +440,8 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
     const bool same = i_is_point && d.correspondence_is_point[j] != 0;
     w2_is_w1 = w2_is_w1 && same;
     out.w1[k] = d1;
-    out.w2[k] = same ? d1 : point_distance(d.correspondence[i], d.correspondence[j]);
+    out.w2[k] =
+        same ? d1 : point_distance(correspondence_of(d, tree, i), correspondence_of(d, tree, j));
     out.curv1[k] = d.curvature_iterated[j];
     out.curv2[k] = d.curvature_other[j];
     out.light1[k] = d.lightness_iterated[j];
@@ -457,7 +473,7 @@ void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& itera
                       radii.statistics2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
     s.within = s.candidates.radius(iterated_tree.points()[i], radii.statistics2);
-    gather_samples(i, d, radii, s);
+    gather_samples(i, iterated_tree, d, radii, s);
     const std::uint32_t input = iterated_tree.input_index()[i];
     features[input] = local_features_and_similarities(s.samples, kPcqmConventions);
     if (counts != nullptr) (*counts)[input] = static_cast<std::uint32_t>(s.within.size());
