@@ -30,6 +30,16 @@ class CandidateSet {
   /// radius2.
   void radius(const Vec3& q, double radius2, std::vector<Neighbour>& out);
 
+  /// A list held by the set: valid until its next query or gather.
+  struct Selection {
+    const Neighbour* data = nullptr;
+    std::size_t count = 0;
+    std::size_t size() const { return count; }
+    const Neighbour& operator[](std::size_t i) const { return data[i]; }
+  };
+  /// radius() without copying the list out.
+  Selection radius(const Vec3& q, double radius2);
+
   /// What knn found besides its list.
   struct Knn {
     double kth_distance2 = 0;  ///< the k-th nearest squared distance (0 when k = 0)
@@ -44,16 +54,24 @@ class CandidateSet {
   /// sqrt(knn_bound2) and the gathered radius.
   Knn knn(const Vec3& q, std::size_t k, double knn_bound2, std::vector<Neighbour>& nearest);
 
-  std::size_t size() const { return index_.size(); }
+  std::size_t size() const { return size_; }
 
  private:
+  template <bool kStrict>
+  Selection select(const Vec3& q, double bound2);
+  template <bool kStrict>
+  void select(const Vec3& q, double bound2, std::vector<Neighbour>& out);
   void distances(const Vec3& q);
   template <bool kStrict>
-  std::size_t select(double bound2, std::vector<Neighbour>& out) const;
+  std::size_t select_scalar(double bound2, std::vector<Neighbour>& out) const;
 
+  std::size_t size_ = 0;
+  /// Candidates in tree order: indices and coordinates (structure of arrays), padded to a
+  /// multiple of kLanes with index 0 at +infinity (never selected).
   std::vector<std::uint32_t> index_;
-  std::vector<double> x_, y_, z_;  // candidate coordinates, structure of arrays
-  std::vector<double> d2_;         // squared distances to the current query
+  std::vector<double> x_, y_, z_;
+  std::vector<double> d2_;           // squared distances to the current query (scalar path)
+  std::vector<Neighbour> selected_;  // the vector path's output before it is copied out
   std::vector<Neighbour> survivors_;
 };
 

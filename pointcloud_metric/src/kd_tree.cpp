@@ -7,7 +7,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "qm3d/common/cpu.h"
 #include "qm3d/common/large_arrays.h"
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define QM3D_KD_TREE_AVX2 1
+#include <immintrin.h>
+#endif
 
 namespace qm3d::pointcloud::detail {
 namespace {
@@ -27,12 +33,64 @@ constexpr double kSpanEps = 0.00001;
 /// copies would stay resident in the building thread's heap.
 std::size_t expected_nodes(std::size_t points) { return points / 2 + 1; }
 
+#if defined(QM3D_KD_TREE_AVX2)
+/// Lists up to this size are sorted by counting ranks (quadratic, but branch-free: about twice
+/// as fast as the insertion sort on PCQM's lists of 15 to 20 neighbours).
+constexpr std::size_t kRankSortMax = 32;
+
+// Sorts by (distance, index) by placing each entry at its rank, the number of entries
+// NeighbourOrder puts before it, counted four at a time. That order is total on a list without
+// NaN distances and repeated (distance, index) pairs, so the result is the one every correct sort
+// gives; false (the list untouched) when the ranks are not a permutation (such a list).
+__attribute__((target("avx2"))) bool sort_by_rank_avx2(std::vector<Neighbour>& v) {
+  const std::size_t n = v.size();
+  alignas(32) double d[kRankSortMax];
+  alignas(32) double id[kRankSortMax];  // indices below 2^32: exact as doubles
+  const std::size_t padded = (n + 3) / 4 * 4;
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = v[i].distance2;
+    id[i] = static_cast<double>(v[i].index);
+  }
+  // Padding is never before anything: +inf is not below any distance, and ties it only with
+  // +inf, whose index is then not above the padding's +inf.
+  for (std::size_t i = n; i < padded; ++i) d[i] = id[i] = std::numeric_limits<double>::infinity();
+  Neighbour sorted[kRankSortMax];
+  std::uint64_t placed = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const __m256d di = _mm256_set1_pd(d[i]);
+    const __m256d ii = _mm256_set1_pd(id[i]);
+    __m256i count = _mm256_setzero_si256();
+    for (std::size_t j = 0; j < padded; j += 4) {
+      const __m256d dj = _mm256_load_pd(d + j);
+      const __m256d before =
+          _mm256_or_pd(_mm256_cmp_pd(dj, di, _CMP_LT_OQ),
+                       _mm256_and_pd(_mm256_cmp_pd(dj, di, _CMP_EQ_OQ),
+                                     _mm256_cmp_pd(_mm256_load_pd(id + j), ii, _CMP_LT_OQ)));
+      count = _mm256_sub_epi64(count, _mm256_castpd_si256(before));  // true lanes are -1
+    }
+    alignas(32) std::uint64_t lanes[4];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), count);
+    const std::uint64_t rank = lanes[0] + lanes[1] + lanes[2] + lanes[3];
+    if (rank >= n) return false;
+    sorted[rank] = v[i];
+    placed |= std::uint64_t{1} << rank;
+  }
+  if (placed != (n == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1)) return false;
+  std::copy(sorted, sorted + n, v.begin());
+  return true;
+}
+#endif
+
 }  // namespace
 
 void sort_by_distance(std::vector<Neighbour>& neighbours) {
-  const auto closer = [](const Neighbour& a, const Neighbour& b) {
-    return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.index < b.index);
-  };
+#if defined(QM3D_KD_TREE_AVX2)
+  if (neighbours.size() > 1 && neighbours.size() <= kRankSortMax && cpu_has_avx2() &&
+      sort_by_rank_avx2(neighbours)) {
+    return;
+  }
+#endif
+  const NeighbourOrder closer;
   if (neighbours.size() > kInsertionSortMax) {
     std::sort(neighbours.begin(), neighbours.end(), closer);
     return;

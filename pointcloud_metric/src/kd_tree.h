@@ -54,6 +54,14 @@ inline double squared_distance(const Vec3& a, const Vec3& b) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+/// (squared distance, index) ascending: a total order on a list of distinct points without NaN
+/// distances.
+struct NeighbourOrder {
+  bool operator()(const Neighbour& a, const Neighbour& b) const {
+    return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.index < b.index);
+  }
+};
+
 /// Orders results by squared distance, ties by index (deterministic; the reference's order
 /// whenever no two distances are equal).
 void sort_by_distance(std::vector<Neighbour>& neighbours);

@@ -24,12 +24,22 @@
 namespace qm3d::pointcloud::detail {
 namespace {
 
-/// Points per query batch (consecutive k-d tree leaves searched with one candidate gather):
-/// batches of up to 16 points were about 3% faster than single leaves on the 1M sphere.
-constexpr std::uint32_t kBatchPoints = 16;
+/// Points per query batch (consecutive k-d tree leaves searched with one candidate gather), and
+/// how far a batch's box may grow when a leaf joins it: at most kBatchGrowth times the larger
+/// side of the two boxes. Consecutive leaves are usually neighbours, but where the tree order
+/// crosses a split plane high in the tree the next leaf can lie across the cloud: merged
+/// regardless (the previous rule), a few batches had boxes of tens of thousands of candidates,
+/// filtered by every one of their points. With the growth bound, batches of up to 32 points
+/// (16.8 on average) had half the candidates per point of 16-point greedy batches (12.7), and the
+/// gathers and filters took about 30% less time on the 1M sphere. Batches only decide how much
+/// is searched: every list is exact, so they never change a value.
+constexpr std::uint32_t kBatchPoints = 32;
+constexpr double kBatchGrowth = 2.0;
 /// Query batches per dynamic-schedule chunk: large enough to keep a thread's queries spatially
 /// coherent, small enough to balance clouds of uneven density.
 constexpr std::int64_t kBatchesPerChunk = 16;
+/// Iterations ahead at which TreeColours announces its random reads of the input colours.
+constexpr std::int64_t kColourPrefetch = 16;
 /// Relative slack on the kNN reach of a batch, covering the rounding of its computation.
 constexpr double kReachSlack = 1.0 + 1e-9;
 
@@ -54,9 +64,12 @@ double point_distance(const Vec3& a, const Vec3& b) {
 }
 
 /// Stage-1 values of each point of the iterated cloud, in its tree order. Stage 1 writes every
-/// element (in parallel: no serial zeroing pass), `underdetermined` by bits.
+/// element (in parallel: no serial zeroing pass), `underdetermined` by bits, and `correspondence`
+/// only where it is not the point itself unless the diagnostics want them all (correspondence_of
+/// reads it): on a colour-only distortion none is written, and its 24 bytes per point are never
+/// faulted in.
 struct PointData {
-  explicit PointData(std::size_t n, bool diagnostics) {
+  explicit PointData(std::size_t n, bool diagnostics) : all_correspondences(diagnostics) {
     correspondence.resize(n);
     correspondence_is_point.resize(n);
     for (auto* v : {&curvature_iterated, &curvature_other, &lightness_iterated, &lightness_other,
@@ -71,8 +84,9 @@ struct PointData {
       count_radius_iterated.resize(n);
     }
   }
+  bool all_correspondences;
   LargeArray<Vec3> correspondence;
-  LargeArray<std::uint8_t> correspondence_is_point;  ///< p-hat == p, bit for bit
+  LargeArray<std::uint8_t> correspondence_is_point;  ///< p-hat == p (compared with ==)
   LargeArray<double> curvature_iterated, curvature_other;
   LargeArray<double> lightness_iterated, lightness_other, chroma_iterated, chroma_other,
       hue_difference;
@@ -98,6 +112,9 @@ class TreeColours {
     bool all_bytes = true;
 #pragma omp parallel for num_threads(thread_count(threads)) reduction(&& : all_bytes)
     for (std::int64_t i = 0; i < n; ++i) {
+      // Random reads of a 24 MB array: announced a few iterations ahead.
+      if (i + kColourPrefetch < n)
+        __builtin_prefetch(&colors[order[std::size_t(i + kColourPrefetch)]]);
       all_bytes = to_bytes(colors[order[std::size_t(i)]], bytes_[std::size_t(i)]) && all_bytes;
     }
     if (all_bytes) return;
@@ -109,16 +126,27 @@ class TreeColours {
   Rgb operator[](std::size_t i) const {
     if (!exact_.empty()) return exact_[i];
     const auto& b = bytes_[i];
-    return Rgb{b[0] / 255.0, b[1] / 255.0, b[2] / 255.0};
+    const auto& unit = unit_values();
+    return Rgb{unit[b[0]], unit[b[1]], unit[b[2]]};
   }
 
  private:
+  /// k / 255.0 for every byte k (the division each lookup would make).
+  static const std::array<double, 256>& unit_values() {
+    static const std::array<double, 256> values = [] {
+      std::array<double, 256> v{};
+      for (int k = 0; k < 256; ++k) v[std::size_t(k)] = k / 255.0;
+      return v;
+    }();
+    return values;
+  }
   static bool to_bytes(const Rgb& c, std::array<std::uint8_t, 3>& out) {
     const double channels[3] = {c.r, c.g, c.b};
+    const auto& unit = unit_values();
     for (int k = 0; k < 3; ++k) {
       if (!(channels[k] >= 0.0 && channels[k] <= 1.0)) return false;
       const int v = static_cast<int>(channels[k] * 255.0 + 0.5);
-      if (v / 255.0 != channels[k]) return false;
+      if (unit[std::size_t(v)] != channels[k]) return false;
       out[k] = static_cast<std::uint8_t>(v);
     }
     return true;
@@ -278,9 +306,12 @@ void stage1_point(const std::array<std::uint32_t, 2>& batch, std::size_t i, cons
                   const DirectionParams& params, const Radii& radii, const Lab2000hlTable& table,
                   Stage1Scratch& s, PointData& out) {
   const Vec3& p = c.iterated_tree.points()[i];
+  Vec3 correspondence;
   const std::uint32_t nearest =
-      match(batch, i, c, params, radii, s, out.correspondence[i], out.underdetermined[i]);
-  out.correspondence_is_point[i] = out.correspondence[i] == p;
+      match(batch, i, c, params, radii, s, correspondence, out.underdetermined[i]);
+  const bool is_point = correspondence == p;
+  out.correspondence_is_point[i] = is_point;
+  if (!is_point || out.all_correspondences) out.correspondence[i] = correspondence;
   const std::vector<Neighbour>& within_iterated =
       c.same_positions ? s.within_other : s.within_iterated;
   if (!c.same_positions) {
@@ -307,17 +338,40 @@ void stage1_batch(const std::array<std::uint32_t, 2>& batch, const Clouds& c,
   }
 }
 
-/// Consecutive leaves of `tree` merged into query batches of at most kBatchPoints points (a
-/// leaf holds at most 10, often 5 or 6): one candidate gather then serves about a dozen
-/// neighbouring queries. Tree-index ranges [first, last), in tree order.
+/// Largest side of a box.
+double longest_side(const Box& b) {
+  return std::max(b.hi[0] - b.lo[0], std::max(b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]));
+}
+
+Box merged(const Box& a, const Box& b) {
+  Box m = a;
+  for (int k = 0; k < 3; ++k) {
+    m.lo[k] = std::min(a.lo[k], b.lo[k]);
+    m.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  return m;
+}
+
+/// Consecutive leaves of `tree` merged into query batches of at most kBatchPoints points whose
+/// box grows by at most kBatchGrowth with each leaf (a leaf holds at most 10 points, often 5 or
+/// 6): one candidate gather then serves a dozen or more neighbouring queries. Tree-index ranges
+/// [first, last), in tree order.
 std::vector<std::array<std::uint32_t, 2>> query_batches(const KdTree& tree) {
   std::vector<std::array<std::uint32_t, 2>> batches;
+  Box box;  // of the last batch
   for (const auto& leaf : tree.leaves()) {
+    const Box leaf_box = box_of(tree.points(), leaf[0], leaf[1]);
     if (!batches.empty() && leaf[1] - batches.back()[0] <= kBatchPoints) {
-      batches.back()[1] = leaf[1];
-    } else {
-      batches.push_back(leaf);
+      const Box both = merged(box, leaf_box);
+      if (longest_side(both) <=
+          kBatchGrowth * std::max(longest_side(box), longest_side(leaf_box))) {
+        batches.back()[1] = leaf[1];
+        box = both;
+        continue;
+      }
     }
+    batches.push_back(leaf);
+    box = leaf_box;
   }
   return batches;
 }
@@ -354,14 +408,22 @@ PointData stage1(const Clouds& c, const DirectionParams& params, const Radii& ra
 
 struct Stage2Scratch {
   CandidateSet candidates;
-  std::vector<Neighbour> within;
+  CandidateSet::Selection within;  ///< p's statistics neighbourhood, held by `candidates`
   NeighbourhoodSamples samples;
 };
+
+/// p-hat of the point of tree index i: the point itself or the stored correspondence (PointData).
+/// Where `==` found them equal they differ at most in the sign of a zero, which no distance
+/// sees.
+const Vec3& correspondence_of(const PointData& d, const KdTree& tree, std::size_t i) {
+  return d.correspondence_is_point[i] != 0 ? tree.points()[i] : d.correspondence[i];
+}
 
 /// Paired samples of p's statistics neighbourhood N(p) (R's points within rx r): w1 from
 /// |p - q_j|, w2 from |p-hat - q-hat_j| (equal to w1 when both correspondences are the points
 /// themselves); R side = index 1, D side = index 2 (compute_statistics).
-void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage2Scratch& s) {
+void gather_samples(std::size_t i, const KdTree& tree, const PointData& d, const Radii& radii,
+                    Stage2Scratch& s) {
   NeighbourhoodSamples& out = s.samples;
   const std::size_t n = s.within.size();
   for (auto* v : {&out.w1, &out.w2, &out.curv1, &out.curv2, &out.light1, &out.light2, &out.chroma1,
@@ -378,7 +440,8 @@ void gather_samples(std::size_t i, const PointData& d, const Radii& radii, Stage
     const bool same = i_is_point && d.correspondence_is_point[j] != 0;
     w2_is_w1 = w2_is_w1 && same;
     out.w1[k] = d1;
-    out.w2[k] = same ? d1 : point_distance(d.correspondence[i], d.correspondence[j]);
+    out.w2[k] =
+        same ? d1 : point_distance(correspondence_of(d, tree, i), correspondence_of(d, tree, j));
     out.curv1[k] = d.curvature_iterated[j];
     out.curv2[k] = d.curvature_other[j];
     out.light1[k] = d.lightness_iterated[j];
@@ -409,8 +472,8 @@ void stage2_batch(const std::array<std::uint32_t, 2>& batch, const KdTree& itera
   s.candidates.gather(iterated_tree, box_of(iterated_tree.points(), batch[0], batch[1]),
                       radii.statistics2);
   for (std::uint32_t i = batch[0]; i < batch[1]; ++i) {
-    s.candidates.radius(iterated_tree.points()[i], radii.statistics2, s.within);
-    gather_samples(i, d, radii, s);
+    s.within = s.candidates.radius(iterated_tree.points()[i], radii.statistics2);
+    gather_samples(i, iterated_tree, d, radii, s);
     const std::uint32_t input = iterated_tree.input_index()[i];
     features[input] = local_features_and_similarities(s.samples, kPcqmConventions);
     if (counts != nullptr) (*counts)[input] = static_cast<std::uint32_t>(s.within.size());

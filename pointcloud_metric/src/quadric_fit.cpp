@@ -112,11 +112,10 @@ namespace {
 // chains of additions instead of one after the other (the fits are latency-bound on n of about
 // 16 to 20 rows); each sum sees the same operations in the same order, so the same bits.
 template <int K>
-bool householder_step(double* const col[7], std::size_t n, const double norm0[6], double r[6][7]) {
+bool householder_step(double* const col[7], std::size_t n, const double norm0[6], double r[6][7],
+                      double& sigma) {
   constexpr int kLater = 6 - K;  // columns K + 1 .. 6 (the right-hand side included)
   const double* x = col[K];
-  double sigma = 0;
-  for (std::size_t i = K + 1; i < n; ++i) sigma += x[i] * x[i];
   const double alpha = x[K];
   const double norm = std::sqrt(alpha * alpha + sigma);
   const double beta = alpha > 0 ? -norm : norm;
@@ -130,13 +129,26 @@ bool householder_step(double* const col[7], std::size_t n, const double norm0[6]
     const double xi = x[i];
     for (int j = 0; j < kLater; ++j) dot[j] += xi * col[K + 1 + j][i];
   }
+  // Column K + 1 first; its part below row K + 1 is final then, and the next step's sum of its
+  // squares (in row order, as a loop of its own would take it) advances with the update, while
+  // the other columns' updates follow.
+  double next_sigma = 0;
   for (int j = 0; j < kLater; ++j) {
     double* y = col[K + 1 + j];
     const double f = 2 * dot[j] / vtv;
     y[K] -= f * v0;
-    for (std::size_t i = K + 1; i < n; ++i) y[i] -= f * x[i];
+    if (j == 0 && K < 5) {
+      y[K + 1] -= f * x[K + 1];
+      for (std::size_t i = K + 2; i < n; ++i) {
+        y[i] -= f * x[i];
+        next_sigma += y[i] * y[i];
+      }
+    } else {
+      for (std::size_t i = K + 1; i < n; ++i) y[i] -= f * x[i];
+    }
     r[K][K + 1 + j] = y[K];
   }
+  sigma = next_sigma;
   return true;
 }
 
@@ -144,16 +156,23 @@ bool householder_step(double* const col[7], std::size_t n, const double norm0[6]
 
 bool solve_well_posed_least_squares(double* const col[7], std::size_t n, double c[6]) {
   // The six column norms' sums advance together (independent chains, each in row order).
+  // With them the first step's sum of squares below its first row (each Householder step
+  // returns the next one's: householder_step).
   double sum[6] = {0, 0, 0, 0, 0, 0};
+  double sigma = 0;
   for (std::size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) sum[k] += col[k][i] * col[k][i];
+    if (i > 0) sigma += col[0][i] * col[0][i];
   }
   double norm0[6];
   for (int k = 0; k < 6; ++k) norm0[k] = std::sqrt(sum[k]);
   double r[6][7];
-  if (!(householder_step<0>(col, n, norm0, r) && householder_step<1>(col, n, norm0, r) &&
-        householder_step<2>(col, n, norm0, r) && householder_step<3>(col, n, norm0, r) &&
-        householder_step<4>(col, n, norm0, r) && householder_step<5>(col, n, norm0, r))) {
+  if (!(householder_step<0>(col, n, norm0, r, sigma) &&
+        householder_step<1>(col, n, norm0, r, sigma) &&
+        householder_step<2>(col, n, norm0, r, sigma) &&
+        householder_step<3>(col, n, norm0, r, sigma) &&
+        householder_step<4>(col, n, norm0, r, sigma) &&
+        householder_step<5>(col, n, norm0, r, sigma))) {
     return false;
   }
   if (!(smallest_singular_value_bound(r, norm0) >= kFastSingularBound)) return false;
@@ -217,7 +236,7 @@ bool QuadricFitter::fit_well_posed(const Vec3& origin, const std::vector<Vec3>& 
 }
 
 QuadricFit QuadricFitter::fit_as_reference(const Vec3& origin, const std::vector<Vec3>& points,
-                                          const std::vector<Neighbour>& neighbours) {
+                                           const std::vector<Neighbour>& neighbours) {
   const Eigen::Index n = static_cast<Eigen::Index>(neighbours.size());
   if (n == 0) return QuadricFit{origin, 0.0, true};
 

@@ -62,6 +62,39 @@ TEST(CandidateSet, BatchedSearchesEqualTreeSearches) {
   }
 }
 
+// radius() is the box's candidates filtered in tree order, with squared_distance's values, bit
+// for bit (whichever path, vector or scalar, the processor takes); so is knn() before its sort.
+TEST(CandidateSet, RadiusListsAreTheCandidatesInTreeOrder) {
+  const KdTree tree(noisy_sphere(3000, 4, 0.01));
+  const double r2 = 0.06 * 0.06;
+  CandidateSet near;
+  std::vector<std::uint32_t> candidates;
+  std::vector<Neighbour> got, nearest;
+  for (const auto& leaf : tree.leaves()) {
+    const Box box = box_of(tree.points(), leaf[0], leaf[1]);
+    near.gather(tree, box, r2);
+    tree.box_search(box.lo, box.hi, r2, candidates);
+    ASSERT_EQ(near.size(), candidates.size());
+    for (std::uint32_t i = leaf[0]; i < leaf[1]; ++i) {
+      const Vec3& q = tree.points()[i];
+      std::vector<Neighbour> expected;
+      for (std::uint32_t c : candidates) {
+        const double d2 = squared_distance(q, tree.points()[c]);
+        if (d2 < r2) expected.push_back(Neighbour{d2, c});
+      }
+      near.radius(q, r2, got);
+      ASSERT_EQ(got.size(), expected.size());
+      for (std::size_t k = 0; k < got.size(); ++k) {
+        EXPECT_EQ(got[k].index, expected[k].index);
+        EXPECT_EQ(got[k].distance2, expected[k].distance2);
+      }
+      // knn: every candidate within the bound (<=), sorted; here all of them.
+      near.knn(q, candidates.size(), 1e300, nearest);
+      ASSERT_EQ(nearest.size(), candidates.size());
+    }
+  }
+}
+
 TEST(CandidateSet, BoxSearchIsASupersetOfEveryQuerysBall) {
   const KdTree tree(noisy_sphere(5000, 3, 0.02));
   std::vector<std::uint32_t> box_points;

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <random>
 #include <limits>
+#include <random>
 #include <set>
 
 namespace qm3d::pointcloud::detail {
@@ -200,6 +200,36 @@ TEST(KdTree, SortedRadiusIsStdSortOfTheTraversal) {
               [](const Neighbour& a, const Neighbour& b) { return a.distance2 < b.distance2; });
     ASSERT_EQ(got.size(), expected.size());
     for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].index, expected[i].index);
+  }
+}
+
+// sort_by_distance orders by (distance, index) whatever the list's length and order (short lists
+// take a rank-counting path on AVX2 machines, longer ones insertion sort or std::sort), ties,
+// zeros of both signs and infinities included.
+TEST(KdTree, SortByDistanceOrdersByDistanceThenIndex) {
+  std::mt19937 rng(11);
+  const double values[] = {0.0, -0.0, 1.0, 2.0, 2.5, std::numeric_limits<double>::infinity()};
+  for (std::size_t n = 0; n <= 80; ++n) {
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<Neighbour> list(n);
+      std::vector<std::uint32_t> indices(200);
+      for (std::uint32_t k = 0; k < indices.size(); ++k) indices[k] = k * 7919u;
+      std::shuffle(indices.begin(), indices.end(), rng);
+      for (std::size_t k = 0; k < n; ++k) {
+        const double d =
+            trial % 2 ? values[rng() % 6] : std::uniform_real_distribution<>(0, 1)(rng);
+        list[k] = Neighbour{d, indices[k]};
+      }
+      std::vector<Neighbour> expected = list;
+      std::sort(expected.begin(), expected.end(), [](const Neighbour& a, const Neighbour& b) {
+        return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.index < b.index);
+      });
+      sort_by_distance(list);
+      for (std::size_t k = 0; k < n; ++k) {
+        EXPECT_EQ(list[k].index, expected[k].index);
+        EXPECT_EQ(list[k].distance2, expected[k].distance2);
+      }
+    }
   }
 }
 
