@@ -513,13 +513,18 @@ MetricSpec pointssim_spec() {
        0,
        1e300},
       {"estimators",
-       "Comma-separated estimators: std, var, meanad, medianad, cov, qcd, mean, or all", "var"},
-      {"poolings", "Comma-separated poolings of the similarity maps: mean, mse, rmse, or all",
-       "mean"},
+       "Comma-separated estimators: std, var, meanad, medianad, cov, qcd, mean, or all",
+       "var",
+       {}},
+      {"poolings",
+       "Comma-separated poolings of the similarity maps: mean, mse, rmse, or all",
+       "mean",
+       {}},
       {"attributes",
        "Comma-separated attributes: geom, norm, curv, color, or all; auto = geom, norm, curv and "
        "color when both clouds have colours",
-       "auto"},
+       "auto",
+       {}},
   };
   s.run = [](const MetricSpec&, const Input& ref, const Input& dist, const RunOptions& run,
              const OptionValues& v) {

@@ -444,7 +444,9 @@ TEST(Pcqm, LongStagesReportFromInsideTheirLoops) {
       caught = std::string(e.what()) == "cancelled";
     }
     EXPECT_EQ(caught, threw) << threads << " threads";
-    if (threads == 1) EXPECT_TRUE(caught);
+    if (threads == 1) {
+      EXPECT_TRUE(caught);
+    }
   }
 }
 
