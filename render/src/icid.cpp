@@ -163,7 +163,15 @@ struct Lab2000hlPlanes {
 void to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table, Lab2000hlPlanes& out) {
   const std::size_t n = in.x.size();
   for (auto* plane : {&out.l, &out.a, &out.b}) plane->resize(n);
+  // Both passes are pure functions of their pixel's values: a pixel equal to the one before
+  // it (a rendered view's flat background, mostly) takes that pixel's results, the same bits.
   for (std::size_t i = 0; i < n; ++i) {
+    if (i > 0 && in.x[i] == in.x[i - 1] && in.y[i] == in.y[i - 1] && in.z[i] == in.z[i - 1]) {
+      out.l[i] = out.l[i - 1];
+      out.a[i] = out.a[i - 1];
+      out.b[i] = out.b[i - 1];
+      continue;
+    }
     const double fx = lab_f(in.x[i] / kWhite[0]);
     const double fy = lab_f(in.y[i] / kWhite[1]);
     const double fz = lab_f(in.z[i] / kWhite[2]);
@@ -173,11 +181,16 @@ void to_lab2000hl(const XyzPlanes& in, const Lab2000hlTable& table, Lab2000hlPla
   }
   // The look-ups in a pass of their own: the tables (1.8 MB) miss the cache, and a loop of
   // look-ups alone keeps many misses in flight.
+  Lab before{std::nan(""), 0, 0}, after{};  // no pixel equals a NaN
   for (std::size_t i = 0; i < n; ++i) {
-    const Lab hl = table.from_cielab(Lab{out.l[i], out.a[i], out.b[i]});
-    out.l[i] = hl.L;
-    out.a[i] = hl.a;
-    out.b[i] = hl.b;
+    const Lab lab{out.l[i], out.a[i], out.b[i]};
+    if (!(lab.L == before.L && lab.a == before.a && lab.b == before.b)) {
+      before = lab;
+      after = table.from_cielab(lab);
+    }
+    out.l[i] = after.L;
+    out.a[i] = after.a;
+    out.b[i] = after.b;
   }
 }
 
