@@ -53,8 +53,10 @@ constexpr CompressTable kCompress = make_compress_table();
 // distances() and select_scalar() four candidates at a time: the same squared distances
 // ((dx dx + dy dy) + dz dz, each operation an IEEE vector operation that rounds as the scalar
 // one; the avx2 target has no FMA to contract them into), the same comparison, the selected
-// candidates packed to the front in order and stored as Neighbours. Writes up to `n` entries of
-// `out` (n a multiple of 4); returns how many were selected.
+// candidates packed to the front in order and stored as Neighbours. Reads the arrays up to `n`
+// rounded up to a multiple of 4 (the padding), selects among the first `n` only (whatever the
+// bound, +infinity included), writes up to that many entries of `out`; returns how many were
+// selected.
 template <bool kStrict>
 __attribute__((target("avx2"))) std::size_t select_avx2(const Vec3& q, const double* x,
                                                         const double* y, const double* z,
@@ -71,8 +73,8 @@ __attribute__((target("avx2"))) std::size_t select_avx2(const Vec3& q, const dou
     const __m256d dz = _mm256_sub_pd(qz, _mm256_loadu_pd(z + j));
     const __m256d d2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
                                      _mm256_mul_pd(dz, dz));
-    const int mask =
-        _mm256_movemask_pd(_mm256_cmp_pd(d2, bound, kStrict ? _CMP_LT_OQ : _CMP_LE_OQ));
+    int mask = _mm256_movemask_pd(_mm256_cmp_pd(d2, bound, kStrict ? _CMP_LT_OQ : _CMP_LE_OQ));
+    if (n - j < kLanes) mask &= (1 << (n - j)) - 1;  // the padding's lanes
     const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kCompress.lanes[mask]));
     const __m256d d =
         _mm256_castsi256_pd(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(d2), perm));
@@ -166,7 +168,7 @@ CandidateSet::Selection CandidateSet::select(const Vec3& q, double bound2) {
 #if defined(QM3D_CANDIDATES_AVX2)
   if (cpu_has_avx2()) {
     const std::size_t m = select_avx2<kStrict>(q, x_.data(), y_.data(), z_.data(), index_.data(),
-                                               index_.size(), bound2, selected_.data());
+                                               size_, bound2, selected_.data());
     return Selection{selected_.data(), m};
   }
 #endif

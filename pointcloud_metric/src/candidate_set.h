@@ -67,7 +67,7 @@ class CandidateSet {
 
   std::size_t size_ = 0;
   /// Candidates in tree order: indices and coordinates (structure of arrays), padded to a
-  /// multiple of kLanes with index 0 at +infinity (never selected).
+  /// multiple of kLanes with index 0 at +infinity (read by the vector path, never selected).
   std::vector<std::uint32_t> index_;
   std::vector<double> x_, y_, z_;
   std::vector<double> d2_;           // squared distances to the current query (scalar path)

@@ -37,6 +37,7 @@ std::size_t expected_nodes(std::size_t points) { return points / 2 + 1; }
 /// Lists up to this size are sorted by counting ranks (quadratic, but branch-free: about twice
 /// as fast as the insertion sort on PCQM's lists of 15 to 20 neighbours).
 constexpr std::size_t kRankSortMax = 32;
+static_assert(kRankSortMax < 64, "the placed ranks are bits of a 64-bit word");
 
 // Sorts by (distance, index) by placing each entry at its rank, the number of entries
 // NeighbourOrder puts before it, counted four at a time. That order is total on a list without
@@ -75,7 +76,7 @@ __attribute__((target("avx2"))) bool sort_by_rank_avx2(std::vector<Neighbour>& v
     sorted[rank] = v[i];
     placed |= std::uint64_t{1} << rank;
   }
-  if (placed != (n == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1)) return false;
+  if (placed != (std::uint64_t{1} << n) - 1) return false;
   std::copy(sorted, sorted + n, v.begin());
   return true;
 }
